@@ -1,0 +1,23 @@
+# Every dependency comes from a Debian 12 package (see tools/install_deps.sh).
+find_package(Threads REQUIRED)
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs calib3d)
+find_package(yaml-cpp REQUIRED)
+find_package(spdlog REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(nlohmann_json 3 REQUIRED)
+find_package(TBB REQUIRED)
+find_package(Ceres REQUIRED)
+find_package(assimp REQUIRED)
+find_package(SuiteSparse REQUIRED)          # cmake/FindSuiteSparse.cmake: 5.x ships no CMake package
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(MAXFLOW REQUIRED IMPORTED_TARGET maxflow)   # Boykov–Kolmogorov max-flow
+# PCL (and through it VTK) is heavy: ask only for what the point-cloud reader uses, and link it
+# privately to the one io library that needs it.
+find_package(PCL 1.10 REQUIRED COMPONENTS common io)
+if(GCPSTEREO_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+endif()
+if(GCPSTEREO_BUILD_BENCHMARKS)
+  find_package(benchmark REQUIRED)
+endif()

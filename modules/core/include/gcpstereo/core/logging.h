@@ -1,0 +1,20 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+
+#include <string>
+
+#include <spdlog/spdlog.h>
+
+namespace gcpstereo {
+
+// The project logs through spdlog's default logger (GCP_LOG_INFO(...) etc. are spdlog::info(...)).
+// Levels: "trace", "debug", "info", "warn", "error", "off".
+void SetLogLevel(const std::string& level);
+
+// Adds a file sink (the run's log in the output folder) next to the console sink. Throws IoError
+// when the file cannot be opened.
+void AddLogFile(const std::string& path);
+// Removes file sinks added by AddLogFile (closing their files).
+void RemoveLogFiles();
+
+}  // namespace gcpstereo

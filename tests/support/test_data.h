@@ -1,0 +1,30 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace gcpstereo::testing {
+
+// The real benchmark data folder: $GCPSTEREO_DATA if set, else ../shared/data beside the source
+// tree. Returns an empty string when it does not exist.
+std::string SharedDataDir();
+
+// The path of `relative` under SharedDataDir(), or "" when the data folder or that entry is absent.
+std::string SharedDataPath(const std::string& relative);
+
+// A fresh empty temporary directory for one test (removed when the process exits normally).
+std::string MakeTempDir(const std::string& prefix);
+
+}  // namespace gcpstereo::testing
+
+// Skips the current test with a clear message when ../shared/data/<relative> is absent; otherwise
+// stores its path in `var`.
+#define GCPSTEREO_REQUIRE_SHARED_DATA(var, relative)                                         \
+  const std::string var = ::gcpstereo::testing::SharedDataPath(relative);                   \
+  if (var.empty()) {                                                                         \
+    GTEST_SKIP() << "real data '" << (relative)                                             \
+                 << "' not found (set GCPSTEREO_DATA or place ../shared/data beside the "    \
+                    "checkout); skipping";                                                   \
+  }
