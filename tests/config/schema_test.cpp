@@ -1,0 +1,176 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/config/schema.h"
+
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "gcpstereo/core/error.h"
+#include "test_data.h"
+
+namespace gcpstereo::config {
+namespace {
+
+struct Options {
+  double lambda_s = 20.0;
+  int count = 360;
+  bool refine = true;
+  std::string space = "depth";
+  std::string path;
+  std::vector<std::string> sources{"lidar"};
+  std::vector<int> tiles{2, 2};
+  std::optional<double> min;
+};
+
+class SchemaTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    schema.Add("optimizer.lambda_s", &o.lambda_s, Range::AtLeast(0.0),
+               {"smoothness weight", "", "λs"});
+    schema.Add("labels.count", &o.count, Range::Between(2, 4096), {"number of labels"});
+    schema.Add("optimizer.refine", &o.refine, {"sub-label refinement"});
+    schema.Add("labels.space", &o.space, {"depth", "inverse_depth", "disparity"}, {"spacing"});
+    schema.Add("dataset.path", &o.path, {}, {"folder"});
+    schema.Add("gcp.sources", &o.sources, {"lidar", "depth_map", "stereo"}, {"sources"});
+    schema.Add("optimizer.tiles", &o.tiles, 2, Range::AtLeast(1), {"tiles"});
+    schema.Add("labels.min", &o.min, Range::GreaterThan(0.0), {"min", "m"});
+  }
+
+  std::string ErrorOf(const std::string& yaml) {
+    try {
+      schema.LoadString(yaml, "test.yaml");
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "no error";
+  }
+
+  Options o;
+  Schema schema;
+};
+
+TEST_F(SchemaTest, AppliesValuesOfEveryType) {
+  schema.LoadString(
+      "optimizer:\n  lambda_s: 12.5\n  refine: false\n  tiles: [3, 4]\n"
+      "labels: {count: 64, space: disparity, min: 0.5}\n"
+      "dataset:\n  path: /data/x\n"
+      "gcp:\n  sources: [stereo, lidar]\n",
+      "test.yaml");
+  EXPECT_EQ(o.lambda_s, 12.5);
+  EXPECT_FALSE(o.refine);
+  EXPECT_EQ(o.tiles, (std::vector<int>{3, 4}));
+  EXPECT_EQ(o.count, 64);
+  EXPECT_EQ(o.space, "disparity");
+  ASSERT_TRUE(o.min.has_value());
+  EXPECT_EQ(*o.min, 0.5);
+  EXPECT_EQ(o.path, "/data/x");
+  EXPECT_EQ(o.sources, (std::vector<std::string>{"stereo", "lidar"}));
+  EXPECT_TRUE(schema.IsSet("labels.count"));
+  EXPECT_FALSE(schema.IsSet("nothing"));
+}
+
+TEST_F(SchemaTest, EmptyListAndAutoAndEmptyDocument) {
+  schema.LoadString("gcp:\n  sources: []\nlabels:\n  min: auto\n", "t");
+  EXPECT_TRUE(o.sources.empty());
+  EXPECT_FALSE(o.min.has_value());
+  schema.LoadString("", "empty.yaml");
+  EXPECT_EQ(o.lambda_s, 20.0);
+}
+
+TEST_F(SchemaTest, UnknownKeyNamesFileLineAndSuggestion) {
+  EXPECT_EQ(ErrorOf("labels:\n  count: 3\noptimizer:\n  lamda_s: 3\n"),
+            "test.yaml:4: unknown configuration key 'optimizer.lamda_s' (did you mean "
+            "'optimizer.lambda_s'?)");
+  EXPECT_EQ(ErrorOf("colour: red\n"), "test.yaml:1: unknown configuration key 'colour'");
+}
+
+TEST_F(SchemaTest, OutOfRangeNamesKeyValueAndBound) {
+  EXPECT_EQ(ErrorOf("optimizer:\n  lambda_s: -1\n"),
+            "test.yaml:2: optimizer.lambda_s = -1. Violated constraint: optimizer.lambda_s >= 0");
+  EXPECT_EQ(ErrorOf("labels:\n  count: 1\n"),
+            "test.yaml:2: labels.count = 1. Violated constraint: 2 <= labels.count <= 4096");
+  EXPECT_EQ(ErrorOf("labels:\n  min: 0\n"),
+            "test.yaml:2: labels.min = 0. Violated constraint: labels.min > 0");
+  EXPECT_EQ(ErrorOf("optimizer:\n  tiles: [0, 2]\n"),
+            "test.yaml:2: optimizer.tiles = [0, 2]. Violated constraint: optimizer.tiles >= 1");
+}
+
+TEST_F(SchemaTest, WrongTypesAreRejected) {
+  EXPECT_EQ(ErrorOf("optimizer:\n  lambda_s: fast\n"),
+            "test.yaml:2: optimizer.lambda_s = fast. Violated constraint: a finite number");
+  EXPECT_EQ(ErrorOf("labels:\n  count: 2.5\n"),
+            "test.yaml:2: labels.count = 2.5. Violated constraint: an integer");
+  EXPECT_EQ(ErrorOf("labels:\n  space: log\n"),
+            "test.yaml:2: labels.space = log. Violated constraint: one of depth, inverse_depth, "
+            "disparity");
+  EXPECT_EQ(ErrorOf("optimizer:\n  tiles: [2]\n"),
+            "test.yaml:2: optimizer.tiles = [2]. Violated constraint: list of 2 integers");
+  EXPECT_EQ(ErrorOf("optimizer: 3\n"),
+            "test.yaml:1: optimizer is a section: expected a mapping of keys, got '3'");
+  EXPECT_EQ(ErrorOf("optimizer:\n  refine: maybe\n"),
+            "test.yaml:2: optimizer.refine = maybe. Violated constraint: true or false");
+  // A failed value leaves the field untouched.
+  EXPECT_EQ(o.count, 360);
+}
+
+TEST_F(SchemaTest, SyntaxErrorNamesLine) {
+  EXPECT_EQ(ErrorOf("labels:\n  count: [1, 2\n"),
+            "test.yaml:3: YAML syntax error: end of sequence flow not found");
+}
+
+TEST_F(SchemaTest, OverridesParseYamlValues) {
+  schema.ApplyOverride("gcp.sources=[stereo]");
+  EXPECT_EQ(o.sources, (std::vector<std::string>{"stereo"}));
+  schema.ApplyOverride("optimizer.lambda_s=7");
+  EXPECT_EQ(o.lambda_s, 7.0);
+  try {
+    schema.ApplyOverride("optimizer.lambda=7");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(),
+                 "--set optimizer.lambda=7: unknown configuration key 'optimizer.lambda' (did you "
+                 "mean 'optimizer.lambda_s'?)");
+  }
+  try {
+    schema.ApplyOverride("labels.count=0");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(),
+                 "--set: labels.count = 0. Violated constraint: 2 <= labels.count <= 4096");
+  }
+  EXPECT_THROW(schema.ApplyOverride("novalue"), ConfigError);
+}
+
+TEST_F(SchemaTest, EffectiveYamlRoundTrips) {
+  schema.LoadString("optimizer:\n  lambda_s: 3\n  tiles: [1, 3]\nlabels:\n  min: 2\n", "t");
+  const std::string yaml = schema.ToYaml();
+  EXPECT_NE(yaml.find("# smoothness weight (paper: λs)"), std::string::npos) << yaml;
+  Options fresh;
+  Schema other;
+  other.Add("optimizer.lambda_s", &fresh.lambda_s, Range::AtLeast(0.0), {"a"});
+  other.Add("labels.count", &fresh.count, Range::Between(2, 4096), {"b"});
+  other.Add("optimizer.refine", &fresh.refine, {"c"});
+  other.Add("labels.space", &fresh.space, {"depth", "inverse_depth", "disparity"}, {"d"});
+  other.Add("dataset.path", &fresh.path, {}, {"e"});
+  other.Add("gcp.sources", &fresh.sources, {"lidar", "depth_map", "stereo"}, {"f"});
+  other.Add("optimizer.tiles", &fresh.tiles, 2, Range::AtLeast(1), {"g"});
+  other.Add("labels.min", &fresh.min, Range::GreaterThan(0.0), {"h"});
+  other.LoadString(yaml, "effective.yaml");
+  EXPECT_EQ(fresh.lambda_s, 3.0);
+  EXPECT_EQ(fresh.tiles, (std::vector<int>{1, 3}));
+  ASSERT_TRUE(fresh.min.has_value());
+  EXPECT_EQ(*fresh.min, 2.0);
+  EXPECT_EQ(fresh.sources, o.sources);
+}
+
+TEST_F(SchemaTest, MissingFileIsAnIoError) {
+  try {
+    schema.LoadFile("/nonexistent/config.yaml");
+    FAIL();
+  } catch (const IoError& e) {
+    EXPECT_STREQ(e.what(), "/nonexistent/config.yaml: cannot open configuration file");
+  }
+}
+
+}  // namespace
+}  // namespace gcpstereo::config
