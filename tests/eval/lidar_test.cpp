@@ -1,0 +1,129 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/eval/lidar.h"
+
+#include <limits>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "gcpstereo/core/error.h"
+
+namespace gcpstereo::eval {
+namespace {
+
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+
+TEST(Lidar, CheckerboardSplitCounts) {
+  // Every pixel centre of a 32×16 image with 8-px blocks: 4×2 blocks, 4 even and 4 odd.
+  std::vector<Eigen::Vector2d> pixels;
+  for (int row = 0; row < 16; ++row) {
+    for (int col = 0; col < 32; ++col) pixels.emplace_back(col, row);
+  }
+  const LidarSplit split = CheckerboardSplit(pixels, 8);
+  EXPECT_EQ(split.gcp_indices.size(), 256u);
+  EXPECT_EQ(split.score_indices.size(), 256u);
+  // (0,0) is a GCP square, (8,0) and (0,8) scoring squares, (8,8) GCP.
+  EXPECT_EQ(split.gcp_indices.front(), 0);
+  EXPECT_EQ(split.score_indices.front(), 8);
+  const auto is_gcp = [&](int index) {
+    return std::binary_search(split.gcp_indices.begin(), split.gcp_indices.end(), index);
+  };
+  EXPECT_FALSE(is_gcp(8 * 32 + 0));
+  EXPECT_TRUE(is_gcp(8 * 32 + 8));
+  EXPECT_TRUE(is_gcp(15 * 32 + 31));  // block (3, 1): even
+
+  // Sub-pixel positions go by their nearest pixel; negative coordinates by floor division.
+  const LidarSplit edge =
+      CheckerboardSplit({{7.4, 0.0}, {7.6, 0.0}, {-0.6, 0.0}, {-0.4, 0.0}, {0.0, 7.5}}, 8);
+  EXPECT_EQ(edge.gcp_indices, (std::vector<int>{0, 3}));
+  EXPECT_EQ(edge.score_indices, (std::vector<int>{1, 2, 4}));
+
+  try {
+    CheckerboardSplit(pixels, 0);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "eval.lidar.block_px = 0. Violated constraint: block_px >= 1");
+  }
+}
+
+TEST(Lidar, KittiStyleScores) {
+  cv::Mat map(10, 10, CV_32F, cv::Scalar(50.0f));
+  map.at<float>(0, 1) = 96.0f;
+  map.at<float>(0, 2) = kNan;
+  map.at<float>(0, 3) = 0.0f;
+  const std::vector<ReferencePoint> points = {
+      {{0.0, 0.0}, 50.0},   // exact
+      {{0.0, 1.0}, 52.9},   // |e| 2.9: bad-1 only
+      {{0.0, 2.0}, 54.0},   // |e| 4 > 3 and > 2.7: bad-3 and bad-1
+      {{1.0, 0.0}, 100.0},  // |e| 4 > 3 but < 5: bad-1 only
+      {{2.0, 0.0}, 30.0},   // NaN estimate: missing, bad in both
+      {{3.0, 0.0}, 30.0},   // 0 estimate: missing, bad in both
+      {{10.4, 0.0}, 30.0},  // nearest pixel (10, 0) is outside
+      {{-0.4, 0.3}, 50.5},  // nearest pixel (0, 0): inside, |e| 0.5
+      {{4.0, 4.0}, 0.0},    // invalid reference
+      {{4.0, 5.0}, std::numeric_limits<double>::infinity()},
+  };
+  const LidarScore s = EvaluateAgainstPoints(map, points);
+  EXPECT_EQ(s.outside, 1);
+  EXPECT_EQ(s.invalid_reference, 2);
+  EXPECT_EQ(s.counted, 7);
+  EXPECT_EQ(s.missing, 2);
+  EXPECT_EQ(s.bad3_count, 3);
+  EXPECT_EQ(s.bad1_count, 5);
+  EXPECT_DOUBLE_EQ(s.bad3_percent, 100.0 * 3 / 7);
+  EXPECT_DOUBLE_EQ(s.bad1_percent, 100.0 * 5 / 7);
+  EXPECT_NEAR(s.mean_abs_error, (0.0 + 2.9 + 4.0 + 4.0 + 0.5) / 5, 1e-12);
+  EXPECT_EQ(s.ToJson()["bad3_count"], 3);
+
+  // The map against its own values: 0 % bad.
+  std::vector<ReferencePoint> own;
+  for (int row = 0; row < 10; ++row) own.push_back({{5.0, static_cast<double>(row)}, 50.0});
+  const LidarScore exact = EvaluateAgainstPoints(map, own);
+  EXPECT_EQ(exact.counted, 10);
+  EXPECT_DOUBLE_EQ(exact.bad3_percent, 0.0);
+  EXPECT_DOUBLE_EQ(exact.bad1_percent, 0.0);
+
+  LidarScoreOptions options;
+  options.bad_abs_px = 0.0;
+  try {
+    EvaluateAgainstPoints(map, own, options);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "eval.lidar.bad_abs_px = 0. Violated constraint: bad_abs_px > 0");
+  }
+  EXPECT_THROW(EvaluateAgainstPoints(cv::Mat(3, 3, CV_8U), own), Error);
+}
+
+TEST(Lidar, ProjectPointCloudKeepsTheNearestPointPerPixel) {
+  const Camera camera = RectifiedSequenceCamera(10.0, 4.0, 3.0, 0.1, 0, 9, 7);
+  PointCloud cloud;
+  cloud.points = {
+      {0.0f, 0.0f, 2.0f},   // pixel (4, 3), depth 2
+      {0.0f, 0.0f, 1.0f},   // same pixel, nearer: wins
+      {0.2f, 0.0f, 2.0f},   // pixel (5, 3)
+      {0.0f, 0.0f, -1.0f},  // behind
+      {5.0f, 0.0f, 1.0f},   // pixel (54, 3): outside
+      {0.2f, 0.0f, 2.0f},   // duplicate of index 2: the lower index stays
+  };
+  const std::vector<ProjectedPoint> kept = ProjectPointCloud(cloud, camera);
+  ASSERT_EQ(kept.size(), 2u);
+  EXPECT_EQ(kept[0].index, 1);
+  EXPECT_DOUBLE_EQ(kept[0].depth, 1.0);
+  EXPECT_NEAR((kept[0].pixel - Eigen::Vector2d(4.0, 3.0)).norm(), 0.0, 1e-12);
+  EXPECT_EQ(kept[1].index, 2);
+  const std::vector<ProjectedPoint> all =
+      ProjectPointCloud(cloud, camera, Eigen::Matrix4d::Identity(), false);
+  EXPECT_EQ(all.size(), 4u);
+
+  // A transform into the world frame is applied first.
+  Eigen::Matrix4d world_from_cloud = Eigen::Matrix4d::Identity();
+  world_from_cloud(2, 3) = 1.0;  // +1 along z
+  const std::vector<ProjectedPoint> moved =
+      ProjectPointCloud(cloud, camera, world_from_cloud, true);
+  ASSERT_FALSE(moved.empty());
+  EXPECT_EQ(moved[0].index, 1);
+  EXPECT_DOUBLE_EQ(moved[0].depth, 2.0);
+}
+
+}  // namespace
+}  // namespace gcpstereo::eval
