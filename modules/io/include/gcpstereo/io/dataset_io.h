@@ -1,0 +1,48 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "gcpstereo/core/types.h"
+
+namespace gcpstereo::io {
+
+// What to load (configuration keys dataset.format, dataset.path, dataset.reference,
+// dataset.neighbors, dataset.scale).
+struct DatasetRequest {
+  std::string format;                  // "strecha", "middlebury" or "kitti_raw"
+  std::string path;                    // the data set's folder (kitti_raw: the drive folder)
+  std::string reference;               // reference view name ("0005", "im2", "0000000010")
+  std::vector<std::string> neighbors;  // neighbour names; empty = all other views (kitti: ignored)
+  double scale = 1.0;                  // image scale factor, valid range (0, 4]; paper: 0.5
+};
+
+// Loads a data set; throws IoError / Error naming the file and the problem for anything missing or
+// malformed, and Error listing the valid names for an unknown view name.
+//
+// strecha     <path>/images/<name>.<ext> + <path>/cameras/<name>.<ext>.camera (any image extension
+//             OpenCV reads). Image size must equal the camera's. With scale ≠ 1 images are resized
+//             with INTER_AREA and cameras with Camera::Rescaled. Ground truth, if present
+//             (synthetic sets): <path>/gt/<ref>.depth.pfm and <ref>.sigma.pfm (nearest-neighbour
+//             resize; values unchanged). rectified = false, world_from_lidar = I.
+// middlebury  2001 tsukuba (scene1.row3.colN.ppm, truedisp.row3.col3.pgm), 2001/2003 im0…im8
+//             (disp2/disp6), 2005/2006 view0…view6 (disp1/disp5); masks nonocc/all/disc when
+//             present. See middlebury_io.cc for the camera model and disparity scales.
+// kitti_raw   <path> = <date>/<date>_drive_NNNN_sync, calibration from the parent folder; reference
+//             = frame name, left image_02 = reference, right image_03 = the single neighbour.
+Dataset LoadDataset(const DatasetRequest& request);
+
+// The individual loaders (LoadDataset dispatches to them).
+Dataset LoadStrechaDataset(const DatasetRequest& request);
+Dataset LoadMiddleburyDataset(const DatasetRequest& request);
+Dataset LoadKittiRawDataset(const DatasetRequest& request);
+
+// Names of the views a data set folder offers (sorted as the loader numbers them), for messages and
+// for tools. Throws like the loaders when the folder is not a data set of that format.
+std::vector<std::string> ListDatasetViews(const std::string& format, const std::string& path);
+
+// <drive_path>/velodyne_points/data/<frame>.bin (not checked for existence).
+std::string KittiVelodynePath(const std::string& drive_path, const std::string& frame);
+
+}  // namespace gcpstereo::io

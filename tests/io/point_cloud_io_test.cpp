@@ -1,0 +1,178 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/io/point_cloud_io.h"
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <Eigen/Geometry>
+
+#include "gcpstereo/core/error.h"
+#include "test_data.h"
+
+namespace gcpstereo::io {
+namespace {
+
+PointCloud RandomCloud(int n, bool sigma, bool intensity, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> uniform(-20.0f, 20.0f);
+  PointCloud cloud;
+  for (int i = 0; i < n; ++i) {
+    cloud.points.emplace_back(uniform(rng), uniform(rng), uniform(rng));
+    if (sigma) cloud.sigma.push_back(0.001f * (1 + i % 7));
+    if (intensity) cloud.intensity.push_back(0.01f * (i % 100));
+  }
+  return cloud;
+}
+
+void WriteRaw(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string ErrorOf(const std::string& path) {
+  try {
+    ReadPointCloud(path);
+  } catch (const IoError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(PointCloudIo, PlyRoundTripWithSigmaAndIntensity) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  const PointCloud cloud = RandomCloud(1000, true, true, 5);
+  WritePointCloudPly(dir + "/laser.ply", cloud);
+  const PointCloud back = ReadPointCloud(dir + "/laser.ply");
+  ASSERT_EQ(back.size(), cloud.size());
+  ASSERT_EQ(back.sigma.size(), cloud.size());
+  ASSERT_EQ(back.intensity.size(), cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    ASSERT_EQ(back.points[i], cloud.points[i]) << i;
+    ASSERT_EQ(back.sigma[i], cloud.sigma[i]) << i;
+    ASSERT_EQ(back.intensity[i], cloud.intensity[i]) << i;
+  }
+}
+
+TEST(PointCloudIo, PlyWithoutOptionalChannels) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  const PointCloud cloud = RandomCloud(10, false, false, 6);
+  WritePointCloudPly(dir + "/xyz.ply", cloud);
+  const PointCloud back = ReadPointCloud(dir + "/xyz.ply");
+  ASSERT_EQ(back.size(), 10u);
+  EXPECT_TRUE(back.sigma.empty());
+  EXPECT_TRUE(back.intensity.empty());
+  EXPECT_EQ(back.points[9], cloud.points[9]);
+}
+
+TEST(PointCloudIo, ReadsAsciiPcdWithSigma) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  WriteRaw(dir + "/c.pcd",
+           "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z sigma\nSIZE 4 4 4 4\nTYPE F F F F\n"
+           "COUNT 1 1 1 1\nWIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n"
+           "1 2 3 0.5\n-4 5.5 6 0.25\n");
+  const PointCloud cloud = ReadPointCloud(dir + "/c.pcd");
+  ASSERT_EQ(cloud.size(), 2u);
+  EXPECT_EQ(cloud.points[1], Eigen::Vector3f(-4.0f, 5.5f, 6.0f));
+  ASSERT_EQ(cloud.sigma.size(), 2u);
+  EXPECT_EQ(cloud.sigma[1], 0.25f);
+}
+
+TEST(PointCloudIo, KittiBinRoundTrip) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  const float values[8] = {1.0f, 2.0f, 3.0f, 0.5f, -7.25f, 8.0f, 0.125f, 0.0f};
+  std::string bytes(sizeof(values), '\0');
+  std::memcpy(&bytes[0], values, sizeof(values));
+  WriteRaw(dir + "/0000000010.bin", bytes);
+  const PointCloud cloud = ReadPointCloud(dir + "/0000000010.bin");
+  ASSERT_EQ(cloud.size(), 2u);
+  EXPECT_EQ(cloud.points[1], Eigen::Vector3f(-7.25f, 8.0f, 0.125f));
+  ASSERT_EQ(cloud.intensity.size(), 2u);
+  EXPECT_EQ(cloud.intensity[0], 0.5f);
+}
+
+TEST(PointCloudIo, BinLengthNotDivisibleBy16) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  const std::string path = dir + "/bad.bin";
+  WriteRaw(path, std::string(36, '\0'));
+  EXPECT_EQ(ErrorOf(path), path +
+                               ": KITTI Velodyne file length 36 bytes is not a multiple of 16 "
+                               "(float32 x, y, z, reflectance)");
+}
+
+TEST(PointCloudIo, CorruptPly) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  const std::string path = dir + "/corrupt.ply";
+  WriteRaw(path,
+           "ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\n"
+           "property float y\nproperty float z\nend_header\n0123456789");
+  EXPECT_NE(ErrorOf(path).find(path + ": cannot read point cloud"), std::string::npos)
+      << ErrorOf(path);
+  WriteRaw(path, "this is not a ply file\n");
+  EXPECT_NE(ErrorOf(path).find(path + ": cannot read point cloud"), std::string::npos)
+      << ErrorOf(path);
+}
+
+TEST(PointCloudIo, NonFiniteEmptyAndUnknownExtension) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  PointCloud cloud = RandomCloud(5, false, false, 7);
+  cloud.points[3].y() = std::numeric_limits<float>::quiet_NaN();
+  WritePointCloudPly(dir + "/nan.ply", cloud);
+  EXPECT_EQ(ErrorOf(dir + "/nan.ply"), dir + "/nan.ply: point 3 has a non-finite coordinate");
+  WriteRaw(dir + "/empty.bin", "");
+  EXPECT_EQ(ErrorOf(dir + "/empty.bin"), dir + "/empty.bin: point cloud is empty");
+  WriteRaw(dir + "/c.xyz", "1 2 3\n");
+  EXPECT_EQ(ErrorOf(dir + "/c.xyz"),
+            dir + "/c.xyz: unknown point cloud extension '.xyz' (expected .ply, .pcd or .bin)");
+  EXPECT_EQ(ErrorOf(dir + "/none.ply"), dir + "/none.ply: point cloud file not found");
+}
+
+TEST(PointCloudIo, ChannelLengthMismatchIsRejected) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  PointCloud cloud = RandomCloud(5, true, false, 8);
+  cloud.sigma.pop_back();
+  EXPECT_THROW(WritePointCloudPly(dir + "/m.ply", cloud), IoError);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.ply"));
+}
+
+TEST(PointCloudIo, GcpsPlyHoldsWorldPointsAndSigma) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  Camera camera;
+  camera.K << 500.0, 0.0, 80.0, 0.0, 500.0, 50.0, 0.0, 0.0, 1.0;
+  camera.world_from_camera_rotation =
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+  camera.center_world = Eigen::Vector3d(1.0, 2.0, 3.0);
+  camera.width = 160;
+  camera.height = 107;
+  GcpSet gcps;
+  gcps.points.push_back({10, 20, 5.0, 0.01, GcpSource::kLidar});
+  gcps.points.push_back({100, 7, 7.5, 0.02, GcpSource::kDepthMap});
+  gcps.points.push_back({159, 106, 3.25, 0.0, GcpSource::kStereo});
+  WriteGcpsPly(dir + "/gcps.ply", gcps, camera);
+  const PointCloud back = ReadPointCloud(dir + "/gcps.ply");
+  ASSERT_EQ(back.size(), 3u);
+  ASSERT_EQ(back.sigma.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    const Gcp& g = gcps.points[i];
+    Eigen::Vector2d pixel;
+    double depth = 0.0;
+    ASSERT_TRUE(camera.Project(back.points[i].cast<double>(), &pixel, &depth));
+    EXPECT_NEAR(pixel.x(), g.col, 1e-3);
+    EXPECT_NEAR(pixel.y(), g.row, 1e-3);
+    EXPECT_NEAR(depth, g.depth, 1e-5);
+    EXPECT_FLOAT_EQ(back.sigma[i], static_cast<float>(g.sigma));
+  }
+  // The header declares the source property (not read back by ReadPointCloud).
+  std::ifstream in(dir + "/gcps.ply", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(bytes.find("property uchar source\n"), std::string::npos);
+  EXPECT_NE(bytes.find("property uchar red\n"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace gcpstereo::io
