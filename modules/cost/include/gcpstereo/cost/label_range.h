@@ -1,0 +1,83 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+
+#include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "gcpstereo/core/labels.h"
+#include "gcpstereo/core/types.h"
+
+namespace gcpstereo::cost {
+
+// How an automatic label range is found when labels.min / labels.max are omitted.
+// YAML keys in brackets.
+struct LabelRangeOptions {
+  // [labels.auto.gcp_low_percentile], [labels.auto.gcp_high_percentile]: robust bounds of the GCP
+  // depths, in percent (linear interpolation between order statistics).
+  // Range: 0 <= low < high <= 100.
+  double gcp_low_percentile = 1.0;
+  double gcp_high_percentile = 99.0;
+  // [labels.auto.margin]: relative widening of the range, dimensionless: [lo / (1 + m), hi · (1 +
+  // m)] (multiplicative, so it stays positive and is symmetric in inverse depth). Range: m >= 0.
+  double margin = 0.1;
+  // [labels.auto.grid_step_px]: spacing of the reference pixels whose rays are intersected with the
+  // neighbours' frusta, in pixels. Range: >= 1.
+  int grid_step_px = 8;
+  // [labels.auto.min_neighbors]: a depth counts when at least this many neighbours see it.
+  // Range: >= 1.
+  int min_neighbors = 1;
+  // [labels.auto.max_depth]: upper bound of the frustum-overlap range, in the data set's depth unit
+  // (metres); +inf = unbounded (fine for inverse depth / disparity labels, where depth +inf is the
+  // value 0; depth labels then need labels.max). Range: > 0.
+  double max_depth = std::numeric_limits<double>::infinity();
+
+  // Throws ConfigError naming the YAML key of the first invalid field.
+  void Check() const;
+};
+
+// [low, high] percentiles of the GCP depths (in percent, 0…100), widened by `margin` as
+// [p_low / (1 + margin), p_high · (1 + margin)]. GCPs with a non-finite or non-positive depth are
+// ignored. Throws Error when no valid GCP remains; ConfigError for bad percentiles or margin
+// (keys labels.auto.*).
+std::pair<double, double> DepthRangeFromGcps(const GcpSet& gcps, double low_percentile,
+                                             double high_percentile, double margin);
+
+// The depths (reference camera z) at which the reference view's rays are seen by neighbours.
+// For the reference pixels on a grid of options.grid_step_px (plus the last row/column), the ray
+// X(z) = C + z·d is intersected exactly with each neighbour's viewing frustum: "in front of the
+// camera and projecting inside the image (Camera::InImage)" is a set of linear inequalities in z
+// (the projection is a ratio of affine functions of z), so each neighbour sees an interval of z.
+// A depth counts when at least options.min_neighbors intervals contain it; the result is the
+// smallest and largest counting depth over all rays, the far end capped at options.max_depth
+// (+inf when unbounded and uncapped). Throws Error when no sampled ray is seen by enough
+// neighbours, or on invalid cameras; ConfigError for bad options.
+std::pair<double, double> DepthRangeFromFrustumOverlap(const View& reference,
+                                                       const std::vector<View>& neighbors,
+                                                       const LabelRangeOptions& options = {});
+
+// Where MakeLabelSpace took its range from.
+struct LabelRangeSummary {
+  std::string source;      // "config", "gcps", "frustum", or e.g. "config+gcps" when mixed
+  double depth_min = 0.0;  // the automatic depth range, when one was computed (else 0)
+  double depth_max = 0.0;
+};
+
+// Builds the label space of the run (configuration keys labels.space, labels.count, labels.min,
+// labels.max): `count` labels equally spaced in `kind` between min and max (in the space's unit;
+// disparity in the data set's GT convention, disparity = disparity_numerator / depth).
+// A missing bound is filled from an automatic depth range: from the GCPs (DepthRangeFromGcps) when
+// `gcps` is not empty, else from the frustum overlap of `reference` and `neighbors`. The depth
+// range [z_min, z_max] maps to [z_min, z_max] (depth), [1/z_max, 1/z_min] (inverse depth) or
+// [num/z_max, num/z_min] (disparity), with 1/+inf = 0. Throws ConfigError when a depth space would
+// need an unbounded maximum (set labels.max or labels.auto.max_depth), or when the result is not a
+// valid LabelSpace.
+LabelSpace MakeLabelSpace(LabelSpaceKind kind, int count, std::optional<double> min,
+                          std::optional<double> max, const GcpSet& gcps, const View& reference,
+                          const std::vector<View>& neighbors, double disparity_numerator,
+                          const LabelRangeOptions& options = {},
+                          LabelRangeSummary* summary = nullptr);
+
+}  // namespace gcpstereo::cost

@@ -1,0 +1,94 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/types.hpp>
+
+#include "gcpstereo/core/cost_volume.h"
+#include "gcpstereo/core/labels.h"
+#include "gcpstereo/core/progress.h"
+#include "gcpstereo/core/types.h"
+
+namespace gcpstereo::cost {
+
+// Options of the multi-view plane-sweep matching cost (Collins 1996, as used by Wang & Yang,
+// CVPR 2011, §4.2). YAML keys in brackets.
+struct PlaneSweepOptions {
+  // τ [cost.truncation]: per-neighbour cost truncation, in RGB grey levels (the Euclidean norm of
+  // an RGB difference lies in [0, 441.7]). Truncation keeps one neighbour that sees an occluder or
+  // a specularity from dominating the mean. The paper gives no value. Measured with pixel-wise WTA
+  // on Middlebury sequences (tsukuba 4 neighbours, venus 6; bad-1 all): τ = 15 / 30 / 45–442 give
+  // 22.8 / 21.3 / 21.0–21.2 % (tsukuba) and 45.8 / 43.5 / 42.8–43.1 % (venus), so WTA is flat above
+  // ≈45; 60 keeps that accuracy while bounding an occluded neighbour's influence (and fixes the
+  // scale the smoothness weight λs is tuned against). Range: τ > 0.
+  double truncation = 60.0;
+  // [cost.aggregation]: how the per-neighbour costs of a pixel and label are combined.
+  //   "mean"   — mean over the neighbours that see the sample (the paper);
+  //   "best_k" — mean of the best_k smallest of them (occlusion-robust; Kang, Szeliski & Chai
+  //   2001).
+  std::string aggregation = "mean";
+  // k [cost.best_k]: neighbours averaged by "best_k"; with fewer voters, all voters are averaged.
+  // Range: best_k >= 1.
+  int best_k = 3;
+  // [cost.min_voters]: a (pixel, label) needs at least this many neighbours that see the sample,
+  // else it gets no data (CostVolume::kNoData). Range: min_voters >= 1.
+  int min_voters = 1;
+  // [cost.progress_rows]: rows of the region computed between two progress reports (and
+  // cancellation checks). Range: >= 1. Has no influence on the result.
+  int progress_rows = 16;
+
+  // Throws ConfigError naming the YAML key of the first invalid field.
+  void Check() const;
+};
+
+// What a plane sweep did (lands in report.json).
+struct PlaneSweepSummary {
+  std::int64_t samples = 0;        // (pixel, label, neighbour) triples evaluated = region · L · N
+  std::int64_t votes = 0;          // samples whose projection fell inside the neighbour image
+  std::int64_t no_data_costs = 0;  // (pixel, label) entries left without data
+  std::int64_t volume_bytes = 0;   // memory of the returned cost volume
+  double seconds = 0.0;            // wall-clock time of the sweep
+  bool cancelled = false;  // the progress callback asked to stop; rows not done have no data
+};
+
+// The plane-sweep data cost Φ(p, l) of Wang & Yang (CVPR 2011), eq. (2), §4.2:
+//
+//   Φ(p, l) = A_{n ∈ V(p,l)} min(‖I_ref(p) − I_n(H_{n,l} p)‖₂, τ)
+//
+// for every pixel p of `region` (a rectangle of the reference image, e.g. a tile plus its margin)
+// and every label l of `labels`:
+//   - z_l = labels.DepthOfLabel(l) is a fronto-parallel plane of the reference camera (camera z =
+//     z_l); z_l = +∞ (disparity / inverse depth 0) is the plane at infinity;
+//   - H_{n,l} = K_n (R + t nᵀ / z_l) K_ref⁻¹ with n = (0, 0, 1), R = R_nᵀ R_ref and
+//     t = R_nᵀ (C_ref − C_n) (Strecha convention, R camera-to-world) maps reference pixels on the
+//     plane to neighbour n's pixels; along a reference row it is x' = (a + b·col)/(c + d·col);
+//   - I_n(·) is sampled bilinearly (RGB, grey levels 0…255); ‖·‖₂ is the Euclidean norm of the RGB
+//     difference (the paper), truncated at τ = options.truncation;
+//   - V(p, l): the neighbours whose image contains the projection (Camera::InImage: within half a
+//     pixel of the border, sampled with edge replication) and that see the plane in front of them;
+//     the others do not vote;
+//   - A: options.aggregation, the mean (the paper) or the mean of the best_k smallest costs;
+//     |V(p, l)| < options.min_voters → no data (CostVolume::kNoData).
+// The returned volume covers `region` with max_cost = τ (16-bit quantisation, step τ / 65534,
+// nearest level, see CostVolume). Rows are computed in parallel (TBB); every entry depends only on
+// its pixel and label, so the result is identical for any thread count; coordinates come from the
+// absolute pixel position, so a tile's costs equal the same pixels' costs in the full image.
+// Speed: the inner loop runs 8 columns at a time with AVX2 where the CPU has it (chosen at run
+// time; a portable scalar loop otherwise, bit-identical results), and labels are processed in
+// blocks of 32 per row before being interleaved into the label-fastest volume. Memory: the volume
+// (2 bytes · region pixels · labels) plus ≈4 bytes per neighbour pixel.
+// Works unchanged for rectified sequences (RectifiedSequenceCamera) with disparity labels, where
+// H reduces to a shift by the label's disparity times the view offset.
+// Deviation from the paper: pixels seen by no neighbour get "no data" instead of a cost.
+// Throws Error when an image is not CV_8UC3 or does not match its camera's size, when a camera is
+// invalid, or when `region` is not inside the reference image; ConfigError for bad options.
+CostVolume ComputePlaneSweepCost(const View& reference, const std::vector<View>& neighbors,
+                                 const LabelSpace& labels, const cv::Rect& region,
+                                 const PlaneSweepOptions& options,
+                                 const ProgressCallback& progress = {},
+                                 PlaneSweepSummary* summary = nullptr);
+
+}  // namespace gcpstereo::cost

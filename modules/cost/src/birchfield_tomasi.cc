@@ -1,0 +1,142 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/cost/birchfield_tomasi.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "cost_internal.h"
+#include "gcpstereo/core/error.h"
+
+namespace gcpstereo::cost {
+
+void BirchfieldTomasiOptions::Check() const {
+  if (!(truncation > 0.0) || !std::isfinite(truncation)) {
+    throw ConfigError(ViolatedConstraint("cost.bt_truncation", internal::Str(truncation),
+                                         "0 < bt_truncation < inf"));
+  }
+  if (channels != "sum" && channels != "max") {
+    throw ConfigError(ViolatedConstraint("cost.bt_channels", channels, "one of sum, max"));
+  }
+}
+
+namespace {
+
+// Value, minimum and maximum of {I(t − ½), I(t), I(t + ½)} of one channel.
+struct Triplet {
+  float value, min, max;
+};
+
+// One channel of a row, linearly interpolated at a real position, border replicated.
+inline float Interpolate(const std::uint8_t* row, int channels, int channel, int width, double t) {
+  t = std::clamp(t, 0.0, static_cast<double>(width - 1));
+  const int i = std::min(static_cast<int>(t), width - 2 < 0 ? 0 : width - 2);
+  const double f = t - i;
+  const float a = row[i * channels + channel];
+  if (f == 0.0 || width == 1) return a;
+  const float b = row[(i + 1) * channels + channel];
+  return static_cast<float>(a + (b - a) * f);
+}
+
+inline Triplet TripletAt(const std::uint8_t* row, int channels, int channel, int width, double t) {
+  const float v = Interpolate(row, channels, channel, width, t);
+  const float lo = Interpolate(row, channels, channel, width, t - 0.5);
+  const float hi = Interpolate(row, channels, channel, width, t + 0.5);
+  return {v, std::min({v, lo, hi}), std::max({v, lo, hi})};
+}
+
+// The symmetric BT dissimilarity of one channel.
+inline float Dissimilarity(const Triplet& l, const Triplet& r) {
+  const float left_to_right = std::max({0.0f, l.value - r.max, r.min - l.value});
+  const float right_to_left = std::max({0.0f, r.value - l.max, l.min - r.value});
+  return std::min(left_to_right, right_to_left);
+}
+
+}  // namespace
+
+CostVolume ComputeBirchfieldTomasiCost(const cv::Mat& left, const cv::Mat& right,
+                                       const std::vector<double>& disparities_px,
+                                       const cv::Rect& region,
+                                       const BirchfieldTomasiOptions& options) {
+  options.Check();
+  if (left.empty() || (left.type() != CV_8UC3 && left.type() != CV_8UC1)) {
+    throw Error("Birchfield-Tomasi cost: the left image must be 8-bit with 1 or 3 channels");
+  }
+  if (right.type() != left.type() || right.size() != left.size()) {
+    std::ostringstream s;
+    s << "Birchfield-Tomasi cost: the right image (" << right.cols << "x" << right.rows << ", "
+      << right.channels() << " channels) must have the left image's size and type (" << left.cols
+      << "x" << left.rows << ", " << left.channels() << " channels)";
+    throw Error(s.str());
+  }
+  if (disparities_px.empty()) throw Error("Birchfield-Tomasi cost: no disparities to evaluate");
+  for (double d : disparities_px) {
+    if (!std::isfinite(d)) {
+      throw Error("Birchfield-Tomasi cost: disparity " + internal::Str(d) + " is not finite");
+    }
+  }
+  if (region.empty() || (region & cv::Rect(0, 0, left.cols, left.rows)) != region) {
+    std::ostringstream s;
+    s << "Birchfield-Tomasi cost: region " << region.width << "x" << region.height << " at ("
+      << region.x << ", " << region.y << ") is empty or not inside the " << left.cols << "x"
+      << left.rows << " left image";
+    throw Error(s.str());
+  }
+
+  const int channels = left.channels();
+  const int width = left.cols;
+  const int num_labels = static_cast<int>(disparities_px.size());
+  const float truncation = static_cast<float>(options.truncation);
+  const bool use_max = options.channels == "max";
+  CostVolume volume(region, num_labels, truncation);
+  const float inv_step = 1.0f / volume.cost_step();
+
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, region.height, 1),
+      [&](const tbb::blocked_range<int>& range) {
+        // Triplets of the whole left / right row, channel-fastest; integer positions only.
+        std::vector<Triplet> left_triplets(static_cast<std::size_t>(width) * channels);
+        std::vector<Triplet> right_triplets(static_cast<std::size_t>(width) * channels);
+        for (int row_local = range.begin(); row_local != range.end(); ++row_local) {
+          const int y = region.y + row_local;
+          const std::uint8_t* left_row = left.ptr<std::uint8_t>(y);
+          const std::uint8_t* right_row = right.ptr<std::uint8_t>(y);
+          for (int x = 0; x < width; ++x) {
+            for (int ch = 0; ch < channels; ++ch) {
+              left_triplets[x * channels + ch] = TripletAt(left_row, channels, ch, width, x);
+              right_triplets[x * channels + ch] = TripletAt(right_row, channels, ch, width, x);
+            }
+          }
+          std::uint16_t* out = volume.MutablePixelData(row_local, 0);
+          for (int l = 0; l < num_labels; ++l) {
+            const double d = disparities_px[l];
+            const bool integer = d == std::floor(d);
+            for (int c = 0; c < region.width; ++c) {
+              const int x = region.x + c;
+              const double xr = x - d;
+              std::uint16_t& entry = out[static_cast<std::size_t>(c) * num_labels + l];
+              if (!(xr >= 0.0 && xr <= width - 1)) {
+                entry = CostVolume::kNoData;
+                continue;
+              }
+              float cost = 0.0f;
+              for (int ch = 0; ch < channels; ++ch) {
+                const Triplet& lt = left_triplets[x * channels + ch];
+                const Triplet rt = integer ? right_triplets[static_cast<int>(xr) * channels + ch]
+                                           : TripletAt(right_row, channels, ch, width, xr);
+                const float dissimilarity = Dissimilarity(lt, rt);
+                cost = use_max ? std::max(cost, dissimilarity) : cost + dissimilarity;
+              }
+              entry = internal::Quantise(std::min(cost, truncation), inv_step);
+            }
+          }
+        }
+      },
+      tbb::simple_partitioner());
+  return volume;
+}
+
+}  // namespace gcpstereo::cost

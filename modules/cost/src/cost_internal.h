@@ -1,0 +1,29 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// Helpers shared by the cost module's sources (not installed).
+#pragma once
+
+#include <cstdint>
+#include <sstream>
+#include <string>
+
+#include "gcpstereo/core/cost_volume.h"
+
+namespace gcpstereo::cost::internal {
+
+template <typename T>
+std::string Str(const T& value) {
+  std::ostringstream s;
+  s << value;
+  return s.str();
+}
+
+// The CostVolume encoding of a cost in [0, max_cost]: nearest quantisation level (ties up),
+// inv_step = 1 / CostVolume::cost_step(). Equal to CostVolume::Encode up to float rounding of the
+// product; inlined because the sweeps encode hundreds of millions of costs.
+inline std::uint16_t Quantise(float cost, float inv_step) {
+  const float q = cost * inv_step + 0.5f;
+  if (!(q > 0.0f)) return 0;
+  return q >= 65534.0f ? std::uint16_t{65534} : static_cast<std::uint16_t>(q);
+}
+
+}  // namespace gcpstereo::cost::internal

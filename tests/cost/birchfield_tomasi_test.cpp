@@ -1,0 +1,184 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/cost/birchfield_tomasi.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include "gcpstereo/core/error.h"
+
+namespace gcpstereo::cost {
+namespace {
+
+cv::Mat GreyRow(const std::vector<int>& values) {
+  cv::Mat row(1, static_cast<int>(values.size()), CV_8UC1);
+  for (std::size_t i = 0; i < values.size(); ++i) row.at<std::uint8_t>(0, i) = values[i];
+  return row;
+}
+
+// Worked by hand from Birchfield & Tomasi (1998), eqs. (1)–(3), with
+// I⁻(x) = ½(I(x) + I(x−1)), I⁺(x) = ½(I(x) + I(x+1)), border pixels replicated.
+TEST(BirchfieldTomasi, HandComputedGreyRow) {
+  const cv::Mat left = GreyRow({10, 20, 80, 40, 40});
+  const cv::Mat right = GreyRow({20, 80, 40, 40, 0});
+  const std::vector<double> d = {0.0, 1.0, -1.0, 0.5, 0.25};
+  const CostVolume v = ComputeBirchfieldTomasiCost(left, right, d, cv::Rect(0, 0, 5, 1));
+  EXPECT_EQ(v.max_cost(), 765.0f);
+  const float tol = v.cost_step();
+  // x=2, d=0: L=80, L±½ = {50, 60} → [50, 80]; R(2)=40, R±½ = {60, 40} → [40, 60].
+  // L→R: max(0, 80−60, 40−80) = 20; R→L: max(0, 40−80, 50−40) = 10; BT = 10.
+  EXPECT_NEAR(v.Cost(0, 2, 0), 10.0f, tol);
+  // x=1, d=0: L [15, 50] ∋ 20; R [50, 80] ∋ 80 → L→R 30, R→L 30.
+  EXPECT_NEAR(v.Cost(0, 1, 0), 30.0f, tol);
+  // x=4, d=0: L [40, 40]; R(4)=0, [0, 20] → L→R 20, R→L 40 → 20.
+  EXPECT_NEAR(v.Cost(0, 4, 0), 20.0f, tol);
+  // x=3, d=1 → x_r=2: L(3)=40 within R's [40, 60] → 0.
+  EXPECT_NEAR(v.Cost(0, 3, 1), 0.0f, tol);
+  // x=0, d=1 → x_r=−1: outside the right image.
+  EXPECT_FALSE(v.HasData(0, 0, 1));
+  // x=2, d=−1 → x_r=3: R(3)=40, [20, 40]; L [50, 80]: L→R 40, R→L 10 → 10.
+  EXPECT_NEAR(v.Cost(0, 2, 2), 10.0f, tol);
+  EXPECT_FALSE(v.HasData(0, 4, 2));
+  // x=1, d=0.25 → x_r=0.75: R(0.75)=65, R(0.25)=35, R(1.25)=70 → [35, 70]; L(1)=20, [15, 50].
+  // L→R: max(0, 20−70, 35−20) = 15; R→L: max(0, 65−50, 15−65) = 15 → 15.
+  EXPECT_NEAR(v.Cost(0, 1, 4), 15.0f, tol);
+  // x=2, d=0.5 → x_r=1.5: R(1.5)=60, R(1)=80, R(2)=40 → [40, 80] ∋ L(2)=80 → 0.
+  EXPECT_NEAR(v.Cost(0, 2, 3), 0.0f, tol);
+  // x=0, d=0.5 → x_r=−0.5: outside.
+  EXPECT_FALSE(v.HasData(0, 0, 3));
+}
+
+// A linear ramp sampled half a pixel apart costs 0 under BT while |ΔI| = 5: the point of the
+// measure (insensitivity to image sampling).
+TEST(BirchfieldTomasi, InsensitiveToHalfPixelSampling) {
+  std::vector<int> l, r;
+  for (int x = 0; x < 20; ++x) {
+    l.push_back(10 * x + 20);
+    r.push_back(10 * x + 25);  // the same ramp sampled at x + ½
+  }
+  const CostVolume v =
+      ComputeBirchfieldTomasiCost(GreyRow(l), GreyRow(r), {0.0}, cv::Rect(0, 0, 20, 1));
+  for (int x = 1; x < 19; ++x) EXPECT_EQ(v.Cost(0, x, 0), 0.0f) << x;
+}
+
+// The textbook definition written out independently for RGB rows (integer and fractional d).
+struct Textbook {
+  const cv::Mat& left;
+  const cv::Mat& right;
+  static double Lerp(const cv::Mat& image, int row, int ch, double t) {
+    const double max_t = image.cols - 1;
+    if (t < 0) t = 0;
+    if (t > max_t) t = max_t;
+    const int i0 = static_cast<int>(std::floor(t));
+    const int i1 = std::min(i0 + 1, image.cols - 1);
+    const double f = t - i0;
+    return (1 - f) * image.at<cv::Vec3b>(row, i0)[ch] + f * image.at<cv::Vec3b>(row, i1)[ch];
+  }
+  static double OneSided(const cv::Mat& a, double xa, const cv::Mat& b, double xb, int row,
+                         int ch) {
+    const double va = Lerp(a, row, ch, xa);
+    const double b0 = Lerp(b, row, ch, xb), bm = Lerp(b, row, ch, xb - 0.5),
+                 bp = Lerp(b, row, ch, xb + 0.5);
+    const double lo = std::min({b0, bm, bp}), hi = std::max({b0, bm, bp});
+    return std::max({0.0, va - hi, lo - va});
+  }
+  double Cost(int row, int x, double d, bool use_max) const {
+    double total = 0;
+    for (int ch = 0; ch < 3; ++ch) {
+      const double bt = std::min(OneSided(left, x, right, x - d, row, ch),
+                                 OneSided(right, x - d, left, x, row, ch));
+      total = use_max ? std::max(total, bt) : total + bt;
+    }
+    return total;
+  }
+};
+
+TEST(BirchfieldTomasi, EqualsTextbookOnRandomRgbRows) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> value(0, 255);
+  cv::Mat left(3, 30, CV_8UC3), right(3, 30, CV_8UC3);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 30; ++c) {
+      left.at<cv::Vec3b>(r, c) = cv::Vec3b(value(rng), value(rng), value(rng));
+      right.at<cv::Vec3b>(r, c) = cv::Vec3b(value(rng), value(rng), value(rng));
+    }
+  }
+  const std::vector<double> d = {0, 1, 2, 3, 7, -2, 0.5, 1.75, -0.3};
+  const cv::Rect region(4, 1, 22, 2);
+  for (const std::string channels : {"sum", "max"}) {
+    BirchfieldTomasiOptions options;
+    options.channels = channels;
+    options.truncation = channels == "sum" ? 200.0 : 90.0;
+    const CostVolume v = ComputeBirchfieldTomasiCost(left, right, d, region, options);
+    const Textbook textbook{left, right};
+    for (int row = 0; row < region.height; ++row) {
+      for (int col = 0; col < region.width; ++col) {
+        for (std::size_t l = 0; l < d.size(); ++l) {
+          const int x = region.x + col;
+          const double xr = x - d[l];
+          if (xr < 0 || xr > 29) {
+            EXPECT_FALSE(v.HasData(row, col, l));
+            continue;
+          }
+          const double expected = std::min(
+              textbook.Cost(region.y + row, x, d[l], channels == "max"), options.truncation);
+          EXPECT_NEAR(v.Cost(row, col, l), expected, 0.5 * v.cost_step() + 1e-4)
+              << channels << " row " << row << " col " << col << " d " << d[l];
+        }
+      }
+    }
+  }
+}
+
+TEST(BirchfieldTomasi, SameBytesForAnyThreadCount) {
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> value(0, 255);
+  cv::Mat left(40, 50, CV_8UC3), right(40, 50, CV_8UC3);
+  for (int r = 0; r < 40; ++r)
+    for (int c = 0; c < 50; ++c) {
+      left.at<cv::Vec3b>(r, c) = cv::Vec3b(value(rng), value(rng), value(rng));
+      right.at<cv::Vec3b>(r, c) = cv::Vec3b(value(rng), value(rng), value(rng));
+    }
+  const std::vector<double> d = {0, 1, 2, 3, 4, 5, 6, 7};
+  const CostVolume a = ComputeBirchfieldTomasiCost(left, right, d, cv::Rect(0, 0, 50, 40));
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  const CostVolume b = ComputeBirchfieldTomasiCost(left, right, d, cv::Rect(0, 0, 50, 40));
+  EXPECT_EQ(0, std::memcmp(a.PixelData(0, 0), b.PixelData(0, 0), a.memory_bytes()));
+}
+
+TEST(BirchfieldTomasi, BadInputsAreReported) {
+  const cv::Mat a(4, 6, CV_8UC3, cv::Scalar::all(0)), b(4, 5, CV_8UC3, cv::Scalar::all(0));
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message([&] { ComputeBirchfieldTomasiCost(a, b, {0.0}, cv::Rect(0, 0, 6, 4)); }),
+            "Birchfield-Tomasi cost: the right image (5x4, 3 channels) must have the left image's "
+            "size and type (6x4, 3 channels)");
+  EXPECT_EQ(message([&] { ComputeBirchfieldTomasiCost(a, a, {}, cv::Rect(0, 0, 6, 4)); }),
+            "Birchfield-Tomasi cost: no disparities to evaluate");
+  EXPECT_EQ(message([&] { ComputeBirchfieldTomasiCost(a, a, {NAN}, cv::Rect(0, 0, 6, 4)); }),
+            "Birchfield-Tomasi cost: disparity nan is not finite");
+  EXPECT_EQ(message([&] { ComputeBirchfieldTomasiCost(a, a, {0.0}, cv::Rect(2, 0, 6, 4)); }),
+            "Birchfield-Tomasi cost: region 6x4 at (2, 0) is empty or not inside the 6x4 left "
+            "image");
+  BirchfieldTomasiOptions o;
+  o.channels = "mean";
+  EXPECT_EQ(message([&] { ComputeBirchfieldTomasiCost(a, a, {0.0}, cv::Rect(0, 0, 6, 4), o); }),
+            "cost.bt_channels = mean. Violated constraint: one of sum, max");
+  o = {};
+  o.truncation = -1;
+  EXPECT_EQ(message([&] { o.Check(); }),
+            "cost.bt_truncation = -1. Violated constraint: 0 < bt_truncation < inf");
+}
+
+}  // namespace
+}  // namespace gcpstereo::cost

@@ -1,0 +1,174 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/cost/label_range.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "gcpstereo/core/error.h"
+#include "synthetic_scene.h"
+
+namespace gcpstereo::cost {
+namespace {
+
+GcpSet Gcps(const std::vector<double>& depths) {
+  GcpSet set;
+  for (double d : depths) set.points.push_back(Gcp{0, 0, d, 0.0, GcpSource::kLidar});
+  return set;
+}
+
+template <typename F>
+std::string ErrorOf(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(LabelRange, GcpPercentilesWithMargin) {
+  // 1 … 101 plus an outlier and invalid depths: percentiles by linear interpolation.
+  std::vector<double> depths;
+  for (int i = 1; i <= 101; ++i) depths.push_back(i);
+  depths.push_back(1e6);  // 102 valid values now
+  depths.push_back(-3.0);
+  depths.push_back(std::nan(""));
+  const auto [lo, hi] = DepthRangeFromGcps(Gcps(depths), 10.0, 90.0, 0.0);
+  // position p·(n−1) with n = 102: 10.1 → 11.1; 90.9 → 91.9.
+  EXPECT_NEAR(lo, 11.1, 1e-9);
+  EXPECT_NEAR(hi, 91.9, 1e-9);
+  const auto [lo2, hi2] = DepthRangeFromGcps(Gcps({2.0, 4.0}), 0.0, 100.0, 0.25);
+  EXPECT_DOUBLE_EQ(lo2, 2.0 / 1.25);
+  EXPECT_DOUBLE_EQ(hi2, 4.0 * 1.25);
+  EXPECT_EQ(ErrorOf([] {
+              DepthRangeFromGcps(Gcps({0.0, -1.0}), 1, 99, 0.1);
+            }),
+            "automatic label range: none of the 2 GCPs has a finite positive depth");
+  EXPECT_EQ(ErrorOf([] { DepthRangeFromGcps(Gcps({1.0}), 50, 50, 0.1); }),
+            "labels.auto.gcp_low_percentile, gcp_high_percentile = 50, 50. Violated constraint: "
+            "0 <= low < high <= 100");
+  EXPECT_EQ(ErrorOf([] { DepthRangeFromGcps(Gcps({1.0}), 1, 99, -0.5); }),
+            "labels.auto.margin = -0.5. Violated constraint: 0 <= margin < inf");
+}
+
+// Rectified cameras along x (focal f, baseline b per view): reference ray at column u is seen by
+// the view one step right for z >= f·b / (u + ½) and by the view one step left for z >= f·b / (W −
+// ½ − u); both are unbounded in depth.
+TEST(LabelRange, FrustumOverlapOfRectifiedCameras) {
+  const int width = 65, height = 9;
+  const double f = 100.0, b = 0.3;
+  auto view = [&](int index) {
+    return View{"v" + std::to_string(index), cv::Mat(),
+                RectifiedSequenceCamera(f, 32.0, 4.0, b, index, width, height)};
+  };
+  const View ref = view(0);
+  LabelRangeOptions options;
+  auto [near, far] = DepthRangeFromFrustumOverlap(ref, {view(1)}, options);
+  EXPECT_NEAR(near, f * b / (width - 0.5), 1e-9);
+  EXPECT_TRUE(std::isinf(far));
+  options.max_depth = 50.0;
+  std::tie(near, far) = DepthRangeFromFrustumOverlap(ref, {view(1), view(-1)}, options);
+  EXPECT_NEAR(near, f * b / (width - 0.5), 1e-9);
+  EXPECT_EQ(far, 50.0);
+  // Seen by both: the nearest depth is on the middle column (u = 32, on the 8-px grid).
+  options.min_neighbors = 2;
+  std::tie(near, far) = DepthRangeFromFrustumOverlap(ref, {view(1), view(-1)}, options);
+  EXPECT_NEAR(near, f * b / 32.5, 1e-9);
+  EXPECT_EQ(far, 50.0);
+  options.min_neighbors = 3;
+  EXPECT_EQ(ErrorOf([&] {
+              DepthRangeFromFrustumOverlap(ref, {view(1), view(-1)}, options);
+            }),
+            "automatic label range: no ray of the reference view 'v0' is seen by 3 neighbour(s) "
+            "(labels.auto.min_neighbors); set labels.min and labels.max");
+  options = {};
+  options.grid_step_px = 0;
+  EXPECT_EQ(ErrorOf([&] { options.Check(); }),
+            "labels.auto.grid_step_px = 0. Violated constraint: grid_step_px >= 1");
+}
+
+// Converging cameras: a bounded frustum overlap; every depth inside is seen, every depth well
+// outside is not.
+TEST(LabelRange, FrustumOverlapOfConvergingCamerasIsConsistent) {
+  using testing::LookAtCamera;
+  const Eigen::Vector3d target(0, 0, 4);
+  const View ref{"ref", cv::Mat(), LookAtCamera(Eigen::Vector3d::Zero(), target, 80, 64, 48)};
+  // The neighbour's axis is 56° from the reference's, more than the 21.8° half field of view of
+  // both: no reference ray reaches infinity inside the neighbour's image.
+  const View nb{"nb", cv::Mat(), LookAtCamera(Eigen::Vector3d(6, 0, 0), target, 80, 64, 48)};
+  LabelRangeOptions options;
+  options.grid_step_px = 1;
+  const auto [near, far] = DepthRangeFromFrustumOverlap(ref, {nb}, options);
+  ASSERT_TRUE(std::isfinite(far));
+  ASSERT_LT(near, 4.0);
+  ASSERT_GT(far, 4.0);
+  // Brute force over rays and depths: the seen set spans [near, far].
+  double seen_min = 1e9, seen_max = 0;
+  for (int r = 0; r < 48; ++r) {
+    for (int c = 0; c < 64; ++c) {
+      for (double z = 0.05; z < 200; z *= 1.002) {
+        const Eigen::Vector3d X = ref.camera.BackProject(Eigen::Vector2d(c, r), z);
+        Eigen::Vector2d px;
+        double depth;
+        if (nb.camera.Project(X, &px, &depth) && nb.camera.InImage(px)) {
+          seen_min = std::min(seen_min, z);
+          seen_max = std::max(seen_max, z);
+        }
+      }
+    }
+  }
+  EXPECT_NEAR(seen_min, near, 0.003 * near);
+  EXPECT_NEAR(seen_max, far, 0.003 * far);
+}
+
+TEST(LabelRange, MakeLabelSpaceFillsMissingBounds) {
+  const View ref{"r", cv::Mat(), RectifiedSequenceCamera(100, 32, 4, 0.3, 0, 65, 9)};
+  const std::vector<View> nbs = {
+      View{"n", cv::Mat(), RectifiedSequenceCamera(100, 32, 4, 0.3, 1, 65, 9)}};
+  LabelRangeSummary summary;
+  // Configured range: taken as is.
+  LabelSpace s =
+      MakeLabelSpace(LabelSpaceKind::kDepth, 10, 1.0, 5.0, GcpSet{}, ref, nbs, 0.0, {}, &summary);
+  EXPECT_EQ(summary.source, "config");
+  EXPECT_EQ(s.min(), 1.0);
+  EXPECT_EQ(s.max(), 5.0);
+  // From GCPs, in disparity (numerator 30): depth [2/1.1, 4·1.1] → disparity [30/4.4, 30·1.1/2].
+  LabelRangeOptions options;
+  options.gcp_low_percentile = 0;
+  options.gcp_high_percentile = 100;
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt,
+                     Gcps({2.0, 3.0, 4.0}), ref, nbs, 30.0, options, &summary);
+  EXPECT_EQ(summary.source, "gcps");
+  EXPECT_NEAR(s.min(), 30.0 / 4.4, 1e-9);
+  EXPECT_NEAR(s.max(), 30.0 * 1.1 / 2.0, 1e-9);
+  // Min from the config, max from the GCPs (inverse depth).
+  s = MakeLabelSpace(LabelSpaceKind::kInverseDepth, 16, 0.1, std::nullopt, Gcps({2.0, 4.0}), ref,
+                     nbs, 0.0, options, &summary);
+  EXPECT_EQ(summary.source, "config+gcps");
+  EXPECT_EQ(s.min(), 0.1);
+  EXPECT_NEAR(s.max(), 1.1 / 2.0, 1e-9);
+  // From the frustum: inverse depth down to 0 (unbounded far).
+  s = MakeLabelSpace(LabelSpaceKind::kInverseDepth, 16, std::nullopt, std::nullopt, GcpSet{}, ref,
+                     nbs, 0.0, {}, &summary);
+  EXPECT_EQ(summary.source, "frustum");
+  EXPECT_EQ(s.min(), 0.0);
+  EXPECT_NEAR(s.max(), 64.5 / 30.0, 1e-9);
+  // Depth labels cannot be unbounded.
+  EXPECT_EQ(ErrorOf([&] {
+              MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, GcpSet{}, ref,
+                             nbs, 0.0);
+            }),
+            "labels.max = auto. Violated constraint: automatic depth range [0.465116, inf] from "
+            "the neighbours' frustum overlap is unbounded; set labels.max or "
+            "labels.auto.max_depth, or use labels.space inverse_depth");
+  options = {};
+  options.max_depth = 20.0;
+  s = MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, GcpSet{}, ref, nbs,
+                     0.0, options);
+  EXPECT_NEAR(s.min(), 30.0 / 64.5, 1e-9);
+  EXPECT_EQ(s.max(), 20.0);
+}
+
+}  // namespace
+}  // namespace gcpstereo::cost
