@@ -1,0 +1,445 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+//
+// Stereo GCPs of Wang & Yang, CVPR 2011, §4.1 (see stereo_gcps.h for the procedure and the
+// deliberate deviations). The three local matchers are private to this file:
+//  * Birchfield–Tomasi [3]: a small private implementation (no aggregation, integer disparities)
+//    rather than cost::ComputeBirchfieldTomasiCost, whose 16-bit volume was not available when
+//    this was written; the two should be deduplicated once the cost module is in.
+//  * NCC over an n×n RGB patch with box filters in double precision (sums of squares of 75 values
+//    up to 255² lose digits in float).
+//  * Yoon–Kweon adaptive support weights, exact formula, window sampled every aw_stride_px.
+#include "gcpstereo/gcp/stereo_gcps.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "gcpstereo/core/error.h"
+
+namespace gcpstereo::gcp {
+namespace {
+
+std::string ToString(double value) {
+  std::ostringstream stream;
+  stream << value;
+  return stream.str();
+}
+
+struct WtaMaps {
+  cv::Mat bt, ncc, aw;  // CV_32S, −1 = invalid
+};
+
+// WTA of BT (sum over channels), reference = `ref`, target pixel x − d.
+cv::Mat WtaBirchfieldTomasi(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax) {
+  const int width = ref.cols;
+  cv::Mat wta(ref.size(), CV_32S, cv::Scalar(-1));
+  std::vector<std::array<float, 3>> ref_min(width), ref_max(width), tgt_min(width), tgt_max(width);
+  auto half_range = [width](const cv::Vec3b* row, std::vector<std::array<float, 3>>* lo,
+                            std::vector<std::array<float, 3>>* hi) {
+    for (int x = 0; x < width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const float v = row[x][c];
+        const float minus = 0.5f * (v + row[std::max(0, x - 1)][c]);
+        const float plus = 0.5f * (v + row[std::min(width - 1, x + 1)][c]);
+        (*lo)[x][c] = std::min({v, minus, plus});
+        (*hi)[x][c] = std::max({v, minus, plus});
+      }
+    }
+  };
+  for (int y = 0; y < ref.rows; ++y) {
+    const cv::Vec3b* r = ref.ptr<cv::Vec3b>(y);
+    const cv::Vec3b* t = target.ptr<cv::Vec3b>(y);
+    half_range(r, &ref_min, &ref_max);
+    half_range(t, &tgt_min, &tgt_max);
+    int* out = wta.ptr<int>(y);
+    for (int x = 0; x < width; ++x) {
+      float best = std::numeric_limits<float>::infinity();
+      for (int d = dmin; d <= dmax; ++d) {
+        const int xt = x - d;
+        if (xt < 0 || xt >= width) continue;
+        float cost = 0.0f;
+        for (int c = 0; c < 3; ++c) {
+          const float a = r[x][c];
+          const float b = t[xt][c];
+          const float d1 = std::max({0.0f, a - tgt_max[xt][c], tgt_min[xt][c] - a});
+          const float d2 = std::max({0.0f, b - ref_max[x][c], ref_min[x][c] - b});
+          cost += std::min(d1, d2);
+        }
+        if (cost < best) {
+          best = cost;
+          out[x] = d;
+        }
+      }
+    }
+  }
+  return wta;
+}
+
+// Target image shifted so that shifted(x) = target(x − d) (edge replicated where x − d is outside).
+cv::Mat Shifted(const cv::Mat& target, int d) {
+  cv::Mat shifted;
+  cv::Mat map_x(target.size(), CV_32F), map_y(target.size(), CV_32F);
+  for (int y = 0; y < target.rows; ++y) {
+    for (int x = 0; x < target.cols; ++x) {
+      map_x.at<float>(y, x) = static_cast<float>(std::min(target.cols - 1, std::max(0, x - d)));
+      map_y.at<float>(y, x) = static_cast<float>(y);
+    }
+  }
+  cv::remap(target, shifted, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_REPLICATE);
+  return shifted;
+}
+
+cv::Mat SumChannels(const cv::Mat& m) {
+  std::vector<cv::Mat> channels;
+  cv::split(m, channels);
+  cv::Mat sum = channels[0].clone();
+  for (size_t i = 1; i < channels.size(); ++i) sum += channels[i];
+  return sum;
+}
+
+cv::Mat WtaNcc(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax, int window) {
+  const cv::Size ksize(window, window);
+  const double n = 3.0 * window * window;
+  cv::Mat ref64, tgt64;
+  ref.convertTo(ref64, CV_64FC3);
+  target.convertTo(tgt64, CV_64FC3);
+  auto box = [&](const cv::Mat& m) {
+    cv::Mat out;
+    cv::boxFilter(m, out, CV_64F, ksize, cv::Point(-1, -1), false, cv::BORDER_REFLECT_101);
+    return SumChannels(out);
+  };
+  const cv::Mat s_ref = box(ref64);
+  const cv::Mat s_ref2 = box(ref64.mul(ref64));
+  cv::Mat best(ref.size(), CV_64F, cv::Scalar(-std::numeric_limits<double>::infinity()));
+  cv::Mat wta(ref.size(), CV_32S, cv::Scalar(-1));
+  for (int d = dmin; d <= dmax; ++d) {
+    const cv::Mat shifted = Shifted(tgt64, d);
+    const cv::Mat s_t = box(shifted);
+    const cv::Mat s_t2 = box(shifted.mul(shifted));
+    const cv::Mat s_rt = box(ref64.mul(shifted));
+    for (int y = 0; y < ref.rows; ++y) {
+      for (int x = std::max(0, d); x < std::min(ref.cols, ref.cols + d); ++x) {
+        const double sr = s_ref.at<double>(y, x), st = s_t.at<double>(y, x);
+        const double var_r = s_ref2.at<double>(y, x) - sr * sr / n;
+        const double var_t = s_t2.at<double>(y, x) - st * st / n;
+        const double denominator = std::sqrt(std::max(0.0, var_r) * std::max(0.0, var_t));
+        if (denominator < 1e-6) continue;  // a flat patch has no correlation
+        const double ncc = (s_rt.at<double>(y, x) - sr * st / n) / denominator;
+        if (ncc > best.at<double>(y, x)) {
+          best.at<double>(y, x) = ncc;
+          wta.at<int>(y, x) = d;
+        }
+      }
+    }
+  }
+  return wta;
+}
+
+cv::Mat ToLab(const cv::Mat& bgr) {
+  cv::Mat bgr32, lab;
+  bgr.convertTo(bgr32, CV_32FC3, 1.0 / 255.0);
+  cv::cvtColor(bgr32, lab, cv::COLOR_BGR2Lab);
+  return lab;
+}
+
+cv::Mat WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax,
+                           const StereoGcpOptions& options) {
+  const int width = ref.cols;
+  const int height = ref.rows;
+  const int num_d = dmax - dmin + 1;
+  const cv::Mat ref_lab = ToLab(ref);
+  const cv::Mat tgt_lab = ToLab(target);
+  // Truncated absolute differences e(q, q − d), one float image per disparity (−1 = invalid).
+  std::vector<cv::Mat> tad(num_d);
+  for (int i = 0; i < num_d; ++i) {
+    const int d = dmin + i;
+    tad[i] = cv::Mat(ref.size(), CV_32F, cv::Scalar(-1.0f));
+    for (int y = 0; y < height; ++y) {
+      const cv::Vec3b* r = ref.ptr<cv::Vec3b>(y);
+      const cv::Vec3b* t = target.ptr<cv::Vec3b>(y);
+      float* out = tad[i].ptr<float>(y);
+      for (int x = std::max(0, d); x < std::min(width, width + d); ++x) {
+        const int xt = x - d;
+        const float e =
+            static_cast<float>(std::abs(r[x][0] - t[xt][0]) + std::abs(r[x][1] - t[xt][1]) +
+                               std::abs(r[x][2] - t[xt][2]));
+        out[x] = std::min(e, static_cast<float>(options.aw_truncation));
+      }
+    }
+  }
+  struct Offset {
+    int dy, dx;
+    float spatial;  // exp(−‖Δp‖ / γ_p)
+  };
+  std::vector<Offset> offsets;
+  const int radius = options.aw_window_px / 2;
+  const int stride = options.aw_stride_px;
+  for (int dy = -(radius / stride) * stride; dy <= radius; dy += stride) {
+    for (int dx = -(radius / stride) * stride; dx <= radius; dx += stride) {
+      offsets.push_back(
+          {dy, dx, static_cast<float>(std::exp(-std::hypot(dx, dy) / options.aw_gamma_p))});
+    }
+  }
+  const int num_k = static_cast<int>(offsets.size());
+  const float inv_gamma_c = static_cast<float>(1.0 / options.aw_gamma_c);
+
+  cv::Mat wta(ref.size(), CV_32S, cv::Scalar(-1));
+  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    std::vector<float> w_ref(static_cast<size_t>(width) * num_k);
+    std::vector<float> w_tgt(static_cast<size_t>(width) * num_k);
+    auto support = [&](const cv::Mat& lab, int y, std::vector<float>* weights) {
+      for (int x = 0; x < width; ++x) {
+        const cv::Vec3f& centre = lab.at<cv::Vec3f>(y, x);
+        for (int k = 0; k < num_k; ++k) {
+          const int qy = y + offsets[k].dy;
+          const int qx = x + offsets[k].dx;
+          float w = 0.0f;
+          if (qy >= 0 && qy < height && qx >= 0 && qx < width) {
+            const cv::Vec3f diff = lab.at<cv::Vec3f>(qy, qx) - centre;
+            w = std::exp(-std::sqrt(diff.dot(diff)) * inv_gamma_c) * offsets[k].spatial;
+          }
+          (*weights)[static_cast<size_t>(x) * num_k + k] = w;
+        }
+      }
+    };
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      support(ref_lab, y, &w_ref);
+      support(tgt_lab, y, &w_tgt);
+      int* out = wta.ptr<int>(y);
+      for (int x = 0; x < width; ++x) {
+        const float* wr = &w_ref[static_cast<size_t>(x) * num_k];
+        double best = std::numeric_limits<double>::infinity();
+        for (int i = 0; i < num_d; ++i) {
+          const int d = dmin + i;
+          const int xt = x - d;
+          if (xt < 0 || xt >= width) continue;
+          const float* wt = &w_tgt[static_cast<size_t>(xt) * num_k];
+          double numerator = 0.0, denominator = 0.0;
+          for (int k = 0; k < num_k; ++k) {
+            const float w = wr[k] * wt[k];  // 0 when q or q̄ is outside its image
+            if (w == 0.0f) continue;
+            const float e = tad[i].at<float>(y + offsets[k].dy, x + offsets[k].dx);
+            numerator += w * e;
+            denominator += w;
+          }
+          if (denominator <= 0.0) continue;
+          const double cost = numerator / denominator;
+          if (cost < best) {
+            best = cost;
+            out[x] = d;
+          }
+        }
+      }
+    }
+  });
+  return wta;
+}
+
+WtaMaps ComputeWtaMaps(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax,
+                       const StereoGcpOptions& options) {
+  WtaMaps maps;
+  maps.bt = WtaBirchfieldTomasi(ref, target, dmin, dmax);
+  maps.ncc = WtaNcc(ref, target, dmin, dmax, options.ncc_window_px);
+  maps.aw = WtaAdaptiveWeights(ref, target, dmin, dmax, options);
+  return maps;
+}
+
+cv::Mat EdgeMask(const cv::Mat& bgr, const StereoGcpOptions& options) {
+  cv::Mat grey, edges;
+  cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+  cv::Canny(grey, edges, options.canny_low, options.canny_high, 3, true);
+  if (options.edge_margin_px > 0) {
+    const int side = 2 * options.edge_margin_px + 1;
+    cv::dilate(edges, edges, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(side, side)));
+  }
+  return edges;
+}
+
+// Candidates of one view: CV_32F median disparity, NaN = not a candidate.
+cv::Mat Candidates(const WtaMaps& maps, const cv::Mat& edges, const StereoGcpOptions& options,
+                   int* num_candidates, int* num_near_edges) {
+  cv::Mat candidates(maps.bt.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  *num_candidates = 0;
+  *num_near_edges = 0;
+  for (int y = 0; y < candidates.rows; ++y) {
+    for (int x = 0; x < candidates.cols; ++x) {
+      std::array<int, 3> d = {maps.bt.at<int>(y, x), maps.ncc.at<int>(y, x), maps.aw.at<int>(y, x)};
+      if (d[0] < 0 || d[1] < 0 || d[2] < 0) continue;
+      std::sort(d.begin(), d.end());
+      if (d[2] - d[0] > options.max_spread_px) continue;
+      if (edges.at<uchar>(y, x)) {
+        ++*num_near_edges;
+        continue;
+      }
+      candidates.at<float>(y, x) = static_cast<float>(d[1]);
+      ++*num_candidates;
+    }
+  }
+  return candidates;
+}
+
+}  // namespace
+
+void StereoGcpOptions::Check() const {
+  auto fail = [](const std::string& key, const std::string& value, const std::string& bound) {
+    throw ConfigError(ViolatedConstraint("gcp.stereo." + key, value, bound));
+  };
+  if (max_spread_px < 0 || max_spread_px > 10) {
+    fail("max_spread_px", std::to_string(max_spread_px), "0 <= max_spread_px <= 10");
+  }
+  if (lr_tolerance_px < 0 || lr_tolerance_px > 10) {
+    fail("lr_tolerance_px", std::to_string(lr_tolerance_px), "0 <= lr_tolerance_px <= 10");
+  }
+  if (!(canny_low >= 0.0)) fail("canny_low", ToString(canny_low), "canny_low >= 0");
+  if (!(canny_high >= canny_low))
+    fail("canny_high", ToString(canny_high), "canny_high >= canny_low");
+  if (edge_margin_px < 0 || edge_margin_px > 20) {
+    fail("edge_margin_px", std::to_string(edge_margin_px), "0 <= edge_margin_px <= 20");
+  }
+  if (ncc_window_px < 3 || ncc_window_px > 15 || ncc_window_px % 2 == 0) {
+    fail("ncc_window_px", std::to_string(ncc_window_px), "odd, 3 <= ncc_window_px <= 15");
+  }
+  if (aw_window_px < 3 || aw_window_px > 71 || aw_window_px % 2 == 0) {
+    fail("aw_window_px", std::to_string(aw_window_px), "odd, 3 <= aw_window_px <= 71");
+  }
+  if (aw_stride_px < 1 || aw_stride_px > 4) {
+    fail("aw_stride_px", std::to_string(aw_stride_px), "1 <= aw_stride_px <= 4");
+  }
+  if (!(aw_gamma_c > 0.0)) fail("aw_gamma_c", ToString(aw_gamma_c), "aw_gamma_c > 0");
+  if (!(aw_gamma_p > 0.0)) fail("aw_gamma_p", ToString(aw_gamma_p), "aw_gamma_p > 0");
+  if (!(aw_truncation > 0.0)) fail("aw_truncation", ToString(aw_truncation), "aw_truncation > 0");
+  if (!(sigma_px >= 0.0)) fail("sigma_px", ToString(sigma_px), "sigma_px >= 0");
+}
+
+StereoGcpResult ExtractStereoGcps(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
+                                  int min_disparity_px, int max_disparity_px,
+                                  const StereoGcpOptions& options,
+                                  const ProgressCallback& progress) {
+  options.Check();
+  if (left_bgr.empty() || left_bgr.type() != CV_8UC3 || right_bgr.type() != CV_8UC3 ||
+      left_bgr.size() != right_bgr.size()) {
+    throw Error("ExtractStereoGcps: left and right must be non-empty CV_8UC3 images of one size");
+  }
+  if (min_disparity_px < 0 || max_disparity_px <= min_disparity_px ||
+      max_disparity_px >= left_bgr.cols) {
+    throw Error("ExtractStereoGcps: disparity range [" + std::to_string(min_disparity_px) + ", " +
+                std::to_string(max_disparity_px) + "] must satisfy 0 <= min < max < width (" +
+                std::to_string(left_bgr.cols) + ")");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  StereoGcpResult result;
+  const WtaMaps left_maps =
+      ComputeWtaMaps(left_bgr, right_bgr, min_disparity_px, max_disparity_px, options);
+  if (progress && !progress(0.5)) throw Error("ExtractStereoGcps: cancelled");
+  // The right view as reference: mirror both images, so that right pixel x ↔ left x + d becomes
+  // the left-reference case x' ↔ x' − d, and mirror the result back.
+  cv::Mat left_flipped, right_flipped;
+  cv::flip(left_bgr, left_flipped, 1);
+  cv::flip(right_bgr, right_flipped, 1);
+  WtaMaps right_maps =
+      ComputeWtaMaps(right_flipped, left_flipped, min_disparity_px, max_disparity_px, options);
+  cv::flip(right_maps.bt, right_maps.bt, 1);
+  cv::flip(right_maps.ncc, right_maps.ncc, 1);
+  cv::flip(right_maps.aw, right_maps.aw, 1);
+  if (progress && !progress(1.0)) throw Error("ExtractStereoGcps: cancelled");
+
+  result.edges = EdgeMask(left_bgr, options);
+  int right_near_edges = 0;
+  const cv::Mat left_candidates = Candidates(
+      left_maps, result.edges, options, &result.num_candidates_left, &result.num_near_edges_left);
+  const cv::Mat right_candidates = Candidates(right_maps, EdgeMask(right_bgr, options), options,
+                                              &result.num_candidates_right, &right_near_edges);
+  result.disparity =
+      cv::Mat(left_bgr.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  for (int y = 0; y < left_bgr.rows; ++y) {
+    for (int x = 0; x < left_bgr.cols; ++x) {
+      const float d_left = left_candidates.at<float>(y, x);
+      if (std::isnan(d_left)) continue;
+      const int xr = x - static_cast<int>(d_left);
+      if (xr < 0 || xr >= left_bgr.cols) continue;
+      const float d_right = right_candidates.at<float>(y, xr);
+      if (std::isnan(d_right) || std::abs(d_left - d_right) > options.lr_tolerance_px) continue;
+      result.disparity.at<float>(y, x) = d_left;
+      ++result.num_gcps;
+    }
+  }
+  result.wta_bt = left_maps.bt;
+  result.wta_ncc = left_maps.ncc;
+  result.wta_aw = left_maps.aw;
+  result.density_percent =
+      100.0 * result.num_gcps / (static_cast<double>(left_bgr.cols) * left_bgr.rows);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+GcpSet StereoGcpsToGcpSet(const cv::Mat& disparity, double disparity_numerator, double sigma_px,
+                          GcpSourceSummary* summary) {
+  if (disparity.empty() || disparity.type() != CV_32F) {
+    throw Error("StereoGcpsToGcpSet: the disparity map must be a non-empty CV_32F image");
+  }
+  if (!(disparity_numerator > 0.0) || !std::isfinite(disparity_numerator)) {
+    throw Error("StereoGcpsToGcpSet: disparity_numerator = " + ToString(disparity_numerator) +
+                " must be > 0");
+  }
+  GcpSourceSummary local;
+  local.source = GcpSourceName(GcpSource::kStereo);
+  GcpSet gcps;
+  for (int row = 0; row < disparity.rows; ++row) {
+    for (int col = 0; col < disparity.cols; ++col) {
+      const float d = disparity.at<float>(row, col);
+      if (!std::isfinite(d)) continue;
+      ++local.num_input;
+      if (d <= 0.0f) {
+        ++local.num_invalid;
+        continue;
+      }
+      Gcp gcp;
+      gcp.col = col;
+      gcp.row = row;
+      gcp.depth = disparity_numerator / d;
+      gcp.sigma = disparity_numerator * sigma_px / (static_cast<double>(d) * d);
+      gcp.source = GcpSource::kStereo;
+      gcps.points.push_back(gcp);
+    }
+  }
+  local.num_gcps = static_cast<int>(gcps.size());
+  local.density_percent = DensityPercent(gcps, disparity.cols, disparity.rows);
+  if (summary) *summary = local;
+  return gcps;
+}
+
+GcpOutlierStats ComputeOutlierStats(const cv::Mat& sparse, const cv::Mat& ground_truth,
+                                    double threshold, const cv::Mat& mask) {
+  if (sparse.type() != CV_32F || ground_truth.type() != CV_32F ||
+      sparse.size() != ground_truth.size() ||
+      (!mask.empty() && (mask.type() != CV_8U || mask.size() != sparse.size()))) {
+    throw Error(
+        "ComputeOutlierStats: sparse and ground truth must be CV_32F of one size, the "
+        "mask empty or CV_8U of that size");
+  }
+  GcpOutlierStats stats;
+  for (int y = 0; y < sparse.rows; ++y) {
+    for (int x = 0; x < sparse.cols; ++x) {
+      const float d = sparse.at<float>(y, x);
+      const float gt = ground_truth.at<float>(y, x);
+      if (!std::isfinite(d) || !std::isfinite(gt)) continue;
+      if (!mask.empty() && mask.at<uchar>(y, x) == 0) continue;
+      ++stats.num_evaluated;
+      if (std::abs(d - gt) > threshold) ++stats.num_outliers;
+    }
+  }
+  stats.outlier_percent =
+      stats.num_evaluated > 0 ? 100.0 * stats.num_outliers / stats.num_evaluated : 0.0;
+  return stats;
+}
+
+}  // namespace gcpstereo::gcp

@@ -1,0 +1,72 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+
+#include <string>
+
+#include <opencv2/core/mat.hpp>
+
+namespace gcpstereo::propagation {
+
+// Options of the adaptive propagation (paper §3.1, eq. 5). YAML keys propagation.*.
+struct PropagationOptions {
+  // γ of eq. 5 (the colour bandwidth of w_pq = max(exp(−‖I_p − I_q‖₂ / γ), ε)), in RGB grey levels
+  // (0…255 per channel). Paper: 1.25. Valid: > 0. Key propagation.gamma.
+  double gamma = 1.25;
+  // ε of eq. 5, the lower bound of w_pq. Paper: 0 ("edge-preserving interpolation"). Valid: [0, 1).
+  // Key propagation.epsilon.
+  double epsilon = 0.0;
+  // Affinities below this value (after the ε floor) are treated as exactly 0, i.e. no link.
+  // Not in the paper: with ε = 0, w = exp(−‖ΔRGB‖/1.25) reaches 1e-150 across strong edges, and a
+  // region tied to the rest only by such links makes the system numerically singular (its values
+  // would be rounding noise). Cutting them turns the region into an honest "unreached" region.
+  // Dropping a link of weight < 1e-8 moves a solution by at most ~1e-8 relative. Valid: [0, 1e-3].
+  // Key propagation.min_weight.
+  double min_weight = 1e-8;
+  // Sparse direct solver: "umfpack" (LU of eq. 5 as written, as in the paper) or "cholmod"
+  // (Cholesky of the equivalent symmetric positive definite form: every non-GCP row of eq. 5 times
+  // Σ_q w_pq is a row of the weighted graph Laplacian, and the GCP unknowns are eliminated — the
+  // same solution, see propagation.cc). Key propagation.solver.
+  std::string solver = "umfpack";
+  // Fill-reducing elimination order: "nested_dissection" (geometric nested dissection of the pixel
+  // grid, computed here in O(n)) or "amd" (the backend's own approximate minimum degree). Same
+  // solution, different speed (see tools/benchmarks/propagation_benchmark.cpp). Not in the paper.
+  // Key propagation.ordering.
+  std::string ordering = "nested_dissection";
+
+  // Throws ConfigError naming the YAML key, value and violated bound.
+  void Check() const;
+};
+
+struct PropagationResult {
+  cv::Mat values;    // CV_32F dense D̂; GCP pixels hold their value exactly; NaN where unreached
+  cv::Mat reached;   // CV_8U, 255 where some GCP reaches the pixel through links w_pq > 0
+  int num_gcps = 0;  // finite entries of sparse_values
+  int num_unknowns = 0;           // size of the solved linear system
+  int num_unreached_pixels = 0;   // pixels in connected regions that contain no GCP (NaN)
+  int num_unreached_regions = 0;  // number of such regions (8-connected over links w_pq > 0)
+  double setup_seconds = 0.0;     // weights, regions and matrix assembly
+  double solve_seconds = 0.0;     // factorisation and solve
+  double residual = 0.0;  // max_p |x_p − Σ_q α_pq x_q| over solved non-GCP pixels (eq. 5)
+  std::string solver;     // the backend that was used
+};
+
+// Adaptive disparity propagation (Wang & Yang, CVPR 2011, §3.1, eq. 5).
+//
+// Minimises J(D̂) = Σ_p (D̂_p − Σ_{q∈N8(p)} α_pq D̂_q)² subject to D̂_p = G_p at the GCPs, with
+//   w_pq = max(exp(−‖I_p − I_q‖₂ / γ), ε)   (γ = options.gamma, ε = options.epsilon),
+//   α_pq = w_pq / Σ_{q'∈N8(p)} w_pq'         (normalised per row),
+// by solving the sparse system A x = b of the paper: A_pp = 1; A_pq = −α_pq and b_p = 0 for a
+// non-GCP p; identity row and b_p = G_p for a GCP.
+//
+// image_bgr: CV_8UC3 reference image (I; BGR order — the distance is the same as in RGB).
+// sparse_values: CV_32F of the same size; a finite entry is a GCP value (whatever the caller
+// propagates: disparities, continuous labels, depths); NaN (any non-finite) = no GCP.
+//
+// Deliberate deviations, all documented on the options: links w < min_weight are cut; pixels in
+// 8-connected regions (over the remaining links) that contain no GCP are found by a traversal
+// before solving, removed from the system (otherwise it is singular) and reported as NaN /
+// num_unreached_*. Throws Error on bad inputs and when the solver fails.
+PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
+                            const PropagationOptions& options);
+
+}  // namespace gcpstereo::propagation
