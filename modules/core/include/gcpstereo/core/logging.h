@@ -7,6 +7,10 @@
 
 namespace gcpstereo {
 
+// Makes spdlog's default logger write trace … info messages to stdout and warnings and errors to
+// stderr (so that a failing command's stderr holds just the problem), in colour on terminals.
+void InstallConsoleLogger();
+
 // The project logs through spdlog's default logger (GCP_LOG_INFO(...) etc. are spdlog::info(...)).
 // Levels: "trace", "debug", "info", "warn", "error", "off".
 void SetLogLevel(const std::string& level);

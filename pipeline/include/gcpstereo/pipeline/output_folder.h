@@ -1,0 +1,38 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace gcpstereo::pipeline {
+
+// The output folder of a run. Files are written into a hidden staging folder inside it and moved
+// to their final names only by Commit(), so a run that fails leaves no partial output under a
+// final name (../shared/CONTRACT.md); the staging folder is removed unless committed.
+class OutputFolder {
+ public:
+  // Creates `final_dir` (and parents) if needed; throws IoError when that is impossible or when
+  // `final_dir` exists and is not a folder.
+  explicit OutputFolder(const std::string& final_dir);
+  ~OutputFolder();
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+
+  // Where to write the output file `name` now (inside the staging folder).
+  std::string Path(const std::string& name);
+  // Where `name` will be after Commit().
+  std::string FinalPath(const std::string& name) const;
+  const std::string& final_dir() const { return final_dir_; }
+
+  // Moves every file written into the staging folder to its final name (replacing older files of
+  // the same name) and removes the staging folder.
+  void Commit();
+
+ private:
+  std::string final_dir_;
+  std::string staging_dir_;
+  std::vector<std::string> names_;
+  bool committed_ = false;
+};
+
+}  // namespace gcpstereo::pipeline

@@ -1,0 +1,50 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// The subcommands of the gcpstereo executable. Each returns the process exit status and throws
+// gcpstereo::Error for bad input (main() prints it as one line).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace gcpstereo::cli {
+
+struct RunArgs {
+  std::string config_path;
+  std::string output_dir;
+  std::vector<std::string> overrides;
+};
+int Run(const RunArgs& args, bool log_level_from_command_line);
+
+struct SynthArgs {
+  std::string preset;
+  std::string output_dir;
+  std::uint64_t seed = 1;
+};
+int Synth(const SynthArgs& args);
+
+struct DemoArgs {
+  std::string output_dir = "gcpstereo-demo";
+};
+int Demo(const DemoArgs& args);
+
+int Keys();
+
+struct EvalArgs {
+  std::string output_folder;  // a finished run's folder (reads depth.pfm/disparity.pfm)
+  std::string depth;          // or a depth map (PFM)
+  std::string disparity;      // or a disparity map (PFM)
+  std::string gt_depth, gt_sigma, gt_disparity, gt_disparity_right;
+  std::string mask_nonocc, mask_all, mask_disc;
+  double gt_disparity_scale = 1.0;
+  int border_px = 0;
+  std::string report;  // where to write the JSON report (default: stdout only)
+};
+void AddEvalOptions(CLI::App* eval, EvalArgs* args);
+int Eval(const EvalArgs& args);
+
+}  // namespace gcpstereo::cli

@@ -1,0 +1,101 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// The gcpstereo command line (../shared/CONTRACT.md): run, synth, eval, demo, keys.
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "commands.h"
+#include "gcpstereo/core/error.h"
+#include "gcpstereo/core/logging.h"
+#include "gcpstereo/core/progress.h"
+
+namespace {
+
+// Errors are one line on stderr: flatten any newline a message may contain.
+std::string OneLine(std::string s) {
+  for (char& c : s) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Progress messages to stdout, warnings and errors to stderr.
+  gcpstereo::InstallConsoleLogger();
+
+  CLI::App app{
+      "gcpstereo — dense depth maps and meshes from calibrated images and sparse ground control "
+      "points\n(Wang & Yang, \"Global Stereo Matching Leveraged by Sparse Ground Control Points\", "
+      "CVPR 2011)"};
+  app.require_subcommand(1);
+  app.fallthrough();  // -q and --log-level may follow the subcommand too
+  app.set_version_flag("--version", std::string("gcpstereo ") + GCPSTEREO_VERSION);
+  bool quiet = false;
+  std::string log_level;
+  app.add_flag("-q,--quiet", quiet, "no progress bars, warnings and errors only");
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off (default info)");
+
+  gcpstereo::cli::RunArgs run_args;
+  CLI::App* run = app.add_subcommand("run", "run the pipeline described by a YAML configuration");
+  run->add_option("config", run_args.config_path, "configuration file (YAML); see configs/")
+      ->required()
+      ->check(CLI::ExistingFile);
+  run->add_option("-o,--output", run_args.output_dir, "output folder (created if missing)")
+      ->required();
+  run->add_option("--set", run_args.overrides,
+                  "override one dotted key, KEY=VALUE with VALUE parsed as YAML "
+                  "(e.g. --set dataset.neighbors=[im1,im3]); repeatable");
+
+  gcpstereo::cli::SynthArgs synth_args;
+  CLI::App* synth = app.add_subcommand("synth", "write a synthetic data set with exact ground truth");
+  synth->add_option("--preset", synth_args.preset, "tiny (~160x107), small (~640x427) or fountain "
+                    "(11 views, 1536x1024)")
+      ->required()
+      ->check(CLI::IsMember({"tiny", "small", "fountain"}));
+  synth->add_option("-o,--output", synth_args.output_dir, "output folder")->required();
+  synth->add_option("--seed", synth_args.seed, "random seed (same seed, same bytes)")
+      ->capture_default_str();
+
+  gcpstereo::cli::DemoArgs demo_args;
+  CLI::App* demo = app.add_subcommand(
+      "demo", "generate the synthetic small scene and run the full pipeline on it, with evaluation");
+  demo->add_option("-o,--output", demo_args.output_dir, "output folder")->capture_default_str();
+
+  CLI::App* keys = app.add_subcommand("keys", "list every configuration key with its default, "
+                                              "range, unit and meaning");
+
+  gcpstereo::cli::EvalArgs eval_args;
+  CLI::App* eval = app.add_subcommand(
+      "eval", "score a depth or disparity map (or a finished output folder) against ground truth");
+  gcpstereo::cli::AddEvalOptions(eval, &eval_args);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  try {
+    gcpstereo::SetProgressBarsEnabled(!quiet);
+    gcpstereo::SetLogLevel(!log_level.empty() ? log_level : (quiet ? "warn" : "info"));
+    if (run->parsed()) return gcpstereo::cli::Run(run_args, !log_level.empty() || quiet);
+    if (synth->parsed()) return gcpstereo::cli::Synth(synth_args);
+    if (demo->parsed()) return gcpstereo::cli::Demo(demo_args);
+    if (keys->parsed()) return gcpstereo::cli::Keys();
+    if (eval->parsed()) return gcpstereo::cli::Eval(eval_args);
+  } catch (const gcpstereo::Error& e) {
+    std::fprintf(stderr, "gcpstereo: error: %s\n", OneLine(e.what()).c_str());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "gcpstereo: internal error: %s\n", OneLine(e.what()).c_str());
+    return 2;
+  }
+  return 0;
+}

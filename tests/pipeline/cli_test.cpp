@@ -1,0 +1,117 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// Runs the gcpstereo executable as a user would and checks exit status and messages.
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "test_data.h"
+
+namespace gcpstereo {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int status = -1;
+  std::string output;  // stdout and stderr, or stderr only
+};
+
+// Runs `args` through the shell; captures stderr (and stdout when `with_stdout`).
+Result RunCli(const std::string& args, bool with_stdout = false) {
+  const std::string command = std::string(GCPSTEREO_EXECUTABLE) + " " + args +
+                              (with_stdout ? " 2>&1" : " 2>&1 >/dev/null");
+  Result r;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string WriteFile(const fs::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(Cli, HelpListsTheCommands) {
+  const Result r = RunCli("--help", true);
+  EXPECT_EQ(r.status, 0);
+  for (const char* command : {"run", "synth", "eval", "demo"}) {
+    EXPECT_NE(r.output.find(command), std::string::npos) << command << " missing in:\n" << r.output;
+  }
+}
+
+TEST(Cli, UnknownConfigKeyIsOneLineNamingTheKey) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli");
+  const std::string config =
+      WriteFile(dir / "bad.yaml", "dataset:\n  path: /x\n  reference: a\nlabels:\n  cuont: 3\n");
+  const Result r = RunCli("run " + config + " -o " + (dir / "out").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output, "gcpstereo: error: " + config +
+                          ":5: unknown configuration key 'labels.cuont' (did you mean "
+                          "'labels.count'?)\n");
+  EXPECT_FALSE(fs::exists(dir / "out" / "report.json"));
+}
+
+TEST(Cli, OutOfRangeOverrideNamesKeyAndBound) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli");
+  const std::string config = WriteFile(dir / "ok.yaml", "dataset:\n  path: /x\n  reference: a\n");
+  const Result r =
+      RunCli("run " + config + " -o " + (dir / "out").string() + " --set dataset.scale=2");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output,
+            "gcpstereo: error: --set: dataset.scale = 2. Violated constraint: 0 < dataset.scale "
+            "<= 1\n");
+}
+
+TEST(Cli, MissingDatasetFailsWithoutOutputs) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli");
+  const std::string config = WriteFile(
+      dir / "ok.yaml", "dataset:\n  path: " + (dir / "nothing").string() + "\n  reference: a\n");
+  const Result r = RunCli("run " + config + " -o " + (dir / "out").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output.rfind("gcpstereo: error: ", 0), 0u) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out" / "report.json"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "effective_config.yaml"));
+}
+
+TEST(Cli, KeysListsContractKeys) {
+  const Result r = RunCli("keys", true);
+  EXPECT_EQ(r.status, 0);
+  for (const char* key : {"dataset.format", "dataset.path", "dataset.reference", "dataset.neighbors",
+                          "dataset.scale", "labels.space", "labels.count", "labels.min",
+                          "labels.max", "gcp.sources", "gcp.lidar.path", "gcp.depth_map.path",
+                          "gcp.depth_map.kind", "gcp.depth_map.scale", "gcp.downsample",
+                          "optimizer.tiles", "optimizer.tile_overlap"}) {
+    EXPECT_NE(r.output.find(std::string("  ") + key + "  ("), std::string::npos) << key;
+  }
+}
+
+TEST(Cli, FountainAtHalfScaleReportsElevenViews) {
+  GCPSTEREO_REQUIRE_SHARED_DATA(fountain, "strecha/fountain-P11");
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli");
+  const Result r = RunCli(std::string("run ") + GCPSTEREO_SOURCE_DIR +
+                          "/configs/fountain_p11.yaml -o " + (dir / "out").string() +
+                          " --set dataset.path=" + fountain + " --set dataset.neighbors=[]" +
+                          " --set runtime.log_level=warn");
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream in(dir / "out" / "report.json");
+  const std::string report((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(report.find("\"num_views\": 11"), std::string::npos) << report;
+  EXPECT_NE(report.find("\"width\": 1536"), std::string::npos);
+  EXPECT_NE(report.find("\"height\": 1024"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "out" / "effective_config.yaml"));
+}
+
+}  // namespace
+}  // namespace gcpstereo
