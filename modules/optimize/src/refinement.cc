@@ -1,0 +1,268 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/optimize/refinement.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+#include <ceres/ceres.h>
+
+#include "gcpstereo/core/error.h"
+#include "gcpstereo/core/system.h"
+
+namespace gcpstereo::optimize {
+namespace {
+
+std::string ToString(double value) {
+  std::ostringstream s;
+  s << value;
+  return s.str();
+}
+
+constexpr double kPriorSmoothing = 0.1;  // label steps; |d| ≈ √(d² + κ²) − κ in Ψ̃
+
+// r = √(dw·a)·(x − m): ½r² is the local quadratic model of data_weight·Φ.
+class QuadraticData final : public ceres::SizedCostFunction<1, 1> {
+ public:
+  QuadraticData(double sqrt_curvature, double minimum)
+      : sqrt_curvature_(sqrt_curvature), minimum_(minimum) {}
+  bool Evaluate(double const* const* x, double* residual, double** jacobians) const override {
+    residual[0] = sqrt_curvature_ * (x[0][0] - minimum_);
+    if (jacobians && jacobians[0]) jacobians[0][0] = sqrt_curvature_;
+    return true;
+  }
+
+ private:
+  double sqrt_curvature_, minimum_;
+};
+
+// r = x_p − x_q (the loss function carries λs·w_pq and the Huber shape).
+class Difference final : public ceres::SizedCostFunction<1, 1, 1> {
+ public:
+  bool Evaluate(double const* const* x, double* residual, double** jacobians) const override {
+    residual[0] = x[0][0] - x[1][0];
+    if (jacobians) {
+      if (jacobians[0]) jacobians[0][0] = 1.0;
+      if (jacobians[1]) jacobians[1][0] = -1.0;
+    }
+    return true;
+  }
+};
+
+// r = sign(d)·√(2 λr Ψ̃(d)), d = x − D̂, so that ½r² = λr Ψ̃(d) and r is smooth at d = 0.
+class GcpResidual final : public ceres::SizedCostFunction<1, 1> {
+ public:
+  GcpResidual(double prior, const EnergyOptions& options)
+      : prior_(prior), lambda_r_(options.lambda_r), gamma_d_(options.gamma_d), eta_(options.eta) {}
+  bool Evaluate(double const* const* x, double* residual, double** jacobians) const override {
+    const double d = x[0][0] - prior_;
+    const double root = std::sqrt(d * d + kPriorSmoothing * kPriorSmoothing);
+    const double u = root - kPriorSmoothing;
+    const double e = (1.0 - eta_) * std::exp(-u / gamma_d_);
+    const double psi = -std::log(e + eta_);
+    if (std::abs(d) < 1e-9) {
+      const double slope = std::sqrt(lambda_r_ * (1.0 - eta_) / (gamma_d_ * kPriorSmoothing));
+      residual[0] = slope * d;
+      if (jacobians && jacobians[0]) jacobians[0][0] = slope;
+      return true;
+    }
+    const double r = std::copysign(std::sqrt(2.0 * lambda_r_ * std::max(psi, 0.0)), d);
+    residual[0] = r;
+    if (jacobians && jacobians[0]) {
+      const double dpsi_du = e / (gamma_d_ * (e + eta_));
+      const double du_dd = d / root;
+      jacobians[0][0] = r != 0.0 ? lambda_r_ * dpsi_du * du_dd / r : 0.0;
+    }
+    return true;
+  }
+
+ private:
+  double prior_, lambda_r_, gamma_d_, eta_;
+};
+
+// Parabola offset in [−0.5, 0.5] and its curvature; false when not convex / at the label range end.
+bool ParabolaFit(const CostVolume& costs, int row, int col, int label, double* offset,
+                 double* curvature, double* slope) {
+  if (label <= 0 || label + 1 >= costs.num_labels()) return false;
+  const double cm = costs.Cost(row, col, label - 1), c0 = costs.Cost(row, col, label),
+               cp = costs.Cost(row, col, label + 1);
+  *curvature = cm - 2.0 * c0 + cp;
+  *slope = 0.5 * (cp - cm);
+  if (!(*curvature > 0.0)) return false;
+  *offset = std::clamp(-*slope / *curvature, -0.5, 0.5);
+  return true;
+}
+
+}  // namespace
+
+const char* RefinementMethodName(RefinementMethod method) {
+  switch (method) {
+    case RefinementMethod::kNone:
+      return "none";
+    case RefinementMethod::kParabola:
+      return "parabola";
+    case RefinementMethod::kCeres:
+      return "ceres";
+  }
+  return "?";
+}
+
+RefinementMethod ParseRefinementMethod(const std::string& name) {
+  if (name == "none") return RefinementMethod::kNone;
+  if (name == "parabola") return RefinementMethod::kParabola;
+  if (name == "ceres") return RefinementMethod::kCeres;
+  throw ConfigError(
+      ViolatedConstraint("optimizer.refinement", name, "one of \"none\", \"parabola\", \"ceres\""));
+}
+
+void RefinementOptions::Check() const {
+  if (max_iterations < 1) {
+    throw ConfigError(ViolatedConstraint("optimizer.refinement_iterations",
+                                         std::to_string(max_iterations), ">= 1"));
+  }
+  if (!(smoothness_huber > 0.0) || !std::isfinite(smoothness_huber)) {
+    throw ConfigError(
+        ViolatedConstraint("optimizer.refinement_huber", ToString(smoothness_huber), "> 0"));
+  }
+  if (!(min_data_curvature > 0.0) || !std::isfinite(min_data_curvature)) {
+    throw ConfigError(ViolatedConstraint("optimizer.refinement_min_curvature",
+                                         ToString(min_data_curvature), "> 0"));
+  }
+  if (num_threads < 1) {
+    throw ConfigError(
+        ViolatedConstraint("optimizer.refinement_threads", std::to_string(num_threads), ">= 1"));
+  }
+}
+
+cv::Mat RefineSubLabel(const MrfProblem& problem, const cv::Mat& labels,
+                       const EnergyOptions& energy_options, const RefinementOptions& options,
+                       RefinementSummary* summary) {
+  const Timer timer;
+  problem.Validate();
+  energy_options.Check();
+  options.Check();
+  const int w = problem.width(), h = problem.height(), num_labels = problem.num_labels();
+  if (labels.type() != CV_32S || labels.cols != w || labels.rows != h) {
+    throw Error("RefineSubLabel: the labelling must be CV_32S of the problem's size " +
+                std::to_string(w) + "x" + std::to_string(h));
+  }
+  const CostVolume& costs = *problem.data;
+  RefinementSummary s;
+  s.method = options.method;
+  s.pixels = w * h;
+
+  // Parabola solution (the result of kParabola and the start of kCeres).
+  std::vector<double> x(static_cast<std::size_t>(w) * h);
+  for (int row = 0; row < h; ++row) {
+    for (int col = 0; col < w; ++col) {
+      const int l = labels.ptr<int>(row)[col];
+      if (l < 0 || l >= num_labels) {
+        throw Error("RefineSubLabel: label " + std::to_string(l) + " at (" + std::to_string(col) +
+                    ", " + std::to_string(row) + ") outside [0, " + std::to_string(num_labels) +
+                    ")");
+      }
+      double offset = 0.0, curvature = 0.0, slope = 0.0;
+      if (options.method != RefinementMethod::kNone &&
+          ParabolaFit(costs, row, col, l, &offset, &curvature, &slope)) {
+        x[row * w + col] = l + offset;
+      } else {
+        x[row * w + col] = l;
+      }
+    }
+  }
+
+  if (options.method == RefinementMethod::kCeres) {
+    // Cost functions outlive the problem (declared first); the shared Difference is added many
+    // times, so the problem must not own them.
+    std::vector<std::unique_ptr<ceres::CostFunction>> owned;
+    owned.reserve(static_cast<std::size_t>(w) * h * 2 + 1);
+    ceres::Problem::Options problem_options;
+    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+    ceres::Problem ceres_problem(problem_options);
+    Difference* difference = new Difference;
+    owned.emplace_back(difference);
+    const bool use_prior =
+        energy_options.use_gcp_energy && !problem.prior.empty() && energy_options.lambda_r > 0.0;
+    for (int row = 0; row < h; ++row) {
+      for (int col = 0; col < w; ++col) {
+        const int p = row * w + col;
+        const int l = labels.ptr<int>(row)[col];
+        double* xp = &x[p];
+        double offset = 0.0, curvature = 0.0, slope = 0.0;
+        double minimum = l;
+        if (l > 0 && l + 1 < num_labels) {
+          ParabolaFit(costs, row, col, l, &offset, &curvature, &slope);
+          curvature = std::max(curvature, options.min_data_curvature);
+          minimum = l - slope / curvature;
+        } else {
+          curvature = options.min_data_curvature;
+        }
+        auto* data = new QuadraticData(std::sqrt(energy_options.data_weight * curvature), minimum);
+        owned.emplace_back(data);
+        ceres_problem.AddResidualBlock(data, nullptr, xp);
+        ceres_problem.SetParameterLowerBound(xp, 0, std::max(0, l - 1));
+        ceres_problem.SetParameterUpperBound(xp, 0, std::min(num_labels - 1, l + 1));
+        if (use_prior) {
+          const float prior = problem.prior.ptr<float>(row)[col];
+          if (std::isfinite(prior)) {
+            auto* gcp = new GcpResidual(prior, energy_options);
+            owned.emplace_back(gcp);
+            ceres_problem.AddResidualBlock(gcp, nullptr, xp);
+          }
+        }
+        auto add_pair = [&](int q, const cv::Vec3b& cq) {
+          const int lq = labels.ptr<int>(q / w)[q % w];
+          if (std::abs(l - lq) >= energy_options.truncation) return;
+          const double weight =
+              energy_options.lambda_s *
+              PairWeight(problem.image.ptr<cv::Vec3b>(row)[col], cq, energy_options);
+          if (weight <= 0.0) return;
+          // ½·scale·huber(r²) ≈ weight·|r| for |r| >> δ: scale = weight / δ.
+          const double delta = options.smoothness_huber;
+          auto* loss = new ceres::ScaledLoss(new ceres::HuberLoss(delta), weight / delta,
+                                             ceres::TAKE_OWNERSHIP);
+          ceres_problem.AddResidualBlock(difference, loss, xp, &x[q]);
+        };
+        if (col + 1 < w) add_pair(p + 1, problem.image.ptr<cv::Vec3b>(row)[col + 1]);
+        if (row + 1 < h) add_pair(p + w, problem.image.ptr<cv::Vec3b>(row + 1)[col]);
+      }
+    }
+    ceres::Solver::Options solver_options;
+    solver_options.max_num_iterations = options.max_iterations;
+    solver_options.num_threads = options.num_threads;
+    solver_options.linear_solver_type =
+        ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE)
+            ? ceres::SPARSE_NORMAL_CHOLESKY
+            : ceres::CGNR;
+    solver_options.logging_type = ceres::SILENT;
+    solver_options.minimizer_progress_to_stdout = false;
+    ceres::Solver::Summary ceres_summary;
+    ceres::Solve(solver_options, &ceres_problem, &ceres_summary);
+    s.initial_cost = ceres_summary.initial_cost;
+    s.final_cost = ceres_summary.final_cost;
+    s.iterations = static_cast<int>(ceres_summary.iterations.size());
+    s.solver_converged = ceres_summary.termination_type == ceres::CONVERGENCE;
+    s.solver_message = ceres_summary.BriefReport();
+  }
+
+  cv::Mat out(h, w, CV_32F);
+  double offset_sum = 0.0;
+  for (int row = 0; row < h; ++row) {
+    for (int col = 0; col < w; ++col) {
+      const double value = x[row * w + col];
+      const double offset = value - labels.ptr<int>(row)[col];
+      offset_sum += std::abs(offset);
+      if (std::abs(offset) > 1e-3) ++s.pixels_moved;
+      out.ptr<float>(row)[col] = static_cast<float>(value);
+    }
+  }
+  s.mean_abs_offset = s.pixels > 0 ? offset_sum / s.pixels : 0.0;
+  s.time_seconds = timer.ElapsedSeconds();
+  if (summary) *summary = s;
+  return out;
+}
+
+}  // namespace gcpstereo::optimize

@@ -1,0 +1,244 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/optimize/alpha_expansion.h"
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "gcpstereo/core/error.h"
+#include "test_problems.h"
+
+namespace gcpstereo::optimize {
+namespace {
+
+using testing::MakeScene;
+using testing::RandomProblem;
+
+// Exhaustive minimum over all L^n labellings of a tiny problem.
+double BruteForceMinimum(const MrfProblem& problem, const EnergyOptions& options) {
+  const int n = problem.width() * problem.height(), num_labels = problem.num_labels();
+  cv::Mat labels(problem.height(), problem.width(), CV_32S, cv::Scalar(0));
+  double best = std::numeric_limits<double>::infinity();
+  while (true) {
+    best = std::min(best, ComputeEnergy(problem, labels, options));
+    int i = 0;
+    for (; i < n; ++i) {
+      int& l = labels.ptr<int>(0)[i];
+      if (++l < num_labels) break;
+      l = 0;
+    }
+    if (i == n) break;
+  }
+  return best;
+}
+
+ExpansionOptions PlainOptions() {
+  ExpansionOptions options;
+  options.candidate_labels = CandidateLabels::kAll;
+  options.convergence_tolerance = 0.0;
+  options.max_cycles = 100;
+  options.verify_moves = true;
+  return options;
+}
+
+EnergyOptions TinyEnergy(bool with_prior) {
+  EnergyOptions options;
+  options.use_gcp_energy = with_prior;
+  return options;
+}
+
+TEST(AlphaExpansion, WithinTheBvzBoundOfTheBruteForceOptimum) {
+  // 3x3 pixels, 3 labels, random costs (on the scale of λs so that smoothness matters).
+  int equal_to_optimum = 0;
+  const int instances = 60;
+  for (int seed = 0; seed < instances; ++seed) {
+    const OwnedMrfProblem owned = RandomProblem(3, 3, 3, 1000 + seed, seed % 2 ? 0.3 : 0.0);
+    const MrfProblem problem = owned.View();
+    const EnergyOptions energy = TinyEnergy(seed % 2 == 1);
+    const double optimum = BruteForceMinimum(problem, energy);
+    const ExpansionResult result = AlphaExpansion(problem, energy, PlainOptions());
+    const double found = result.breakdown.total();
+    // BVZ 2001, Thm. 6.1: E(f̂) <= 2c·E(f*), c = max V / min nonzero V = T / 1 = 2 here.
+    const double c = energy.truncation / 1.0;
+    EXPECT_LE(found, 2.0 * c * optimum + 1e-9) << "seed " << seed;
+    EXPECT_GE(found, optimum - 1e-9) << "seed " << seed;
+    if (found <= optimum + 1e-9) ++equal_to_optimum;
+  }
+  // Expansion is usually optimal on such tiny problems; the bound is loose.
+  EXPECT_GE(equal_to_optimum, instances / 2);
+}
+
+TEST(AlphaExpansion, ExactOnTwoLabels) {
+  for (int seed = 0; seed < 40; ++seed) {
+    const OwnedMrfProblem owned = RandomProblem(3, 3, 2, 2000 + seed, seed % 2 ? 0.4 : 0.0);
+    const MrfProblem problem = owned.View();
+    const EnergyOptions energy = TinyEnergy(true);
+    const double optimum = BruteForceMinimum(problem, energy);
+    const ExpansionResult result = AlphaExpansion(problem, energy, PlainOptions());
+    EXPECT_NEAR(result.breakdown.total(), optimum, 1e-9 * std::max(1.0, optimum))
+        << "seed " << seed;
+  }
+}
+
+TEST(ExpansionMove, GraphEnergyEqualsDirectEnergyAndTheMoveIsOptimal) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int num_labels = 2 + trial % 5;
+    const OwnedMrfProblem owned = RandomProblem(3, 3, num_labels, 3000 + trial, 0.3);
+    const MrfProblem problem = owned.View();
+    EnergyOptions energy;
+    energy.truncation = 1.0 + trial % 3;
+    cv::Mat labels(3, 3, CV_32S);
+    std::uniform_int_distribution<int> label(0, num_labels - 1);
+    for (int i = 0; i < 9; ++i) labels.ptr<int>(0)[i] = label(rng);
+    const int alpha = label(rng);
+    double graph_energy = 0.0;
+    const cv::Mat moved = ExpansionMove(problem, energy, labels, alpha, &graph_energy);
+    const double direct = ComputeEnergy(problem, moved, energy);
+    EXPECT_NEAR(graph_energy, direct, 1e-9 * std::max(1.0, direct)) << "trial " << trial;
+    // Brute force over the 2^9 binary choices keep / switch to α.
+    double best = std::numeric_limits<double>::infinity();
+    for (int mask = 0; mask < 512; ++mask) {
+      cv::Mat candidate = labels.clone();
+      for (int i = 0; i < 9; ++i) {
+        if (mask & (1 << i)) candidate.ptr<int>(0)[i] = alpha;
+      }
+      best = std::min(best, ComputeEnergy(problem, candidate, energy));
+    }
+    EXPECT_NEAR(direct, best, 1e-9 * std::max(1.0, best)) << "trial " << trial;
+    for (int i = 0; i < 9; ++i) {
+      const int l = moved.ptr<int>(0)[i];
+      EXPECT_TRUE(l == alpha || l == labels.ptr<int>(0)[i]);
+    }
+  }
+}
+
+TEST(AlphaExpansion, EnergyNeverIncreasesAndMatchesTheDirectEnergy) {
+  const testing::SceneProblem scene = MakeScene(48, 36, 16, 11, 6.0f, 0.02);
+  const MrfProblem problem = scene.problem.View();
+  for (CandidateLabels mode : {CandidateLabels::kAll, CandidateLabels::kLocal}) {
+    ExpansionOptions options = PlainOptions();
+    options.candidate_labels = mode;
+    options.candidate_block_px = 8;
+    const ExpansionResult result = AlphaExpansion(problem, EnergyOptions(), options);
+    ASSERT_FALSE(result.energy_per_cycle.empty());
+    double previous = result.initial_energy;
+    for (double e : result.energy_per_cycle) {
+      EXPECT_LE(e, previous);
+      previous = e;
+    }
+    EXPECT_TRUE(result.converged);
+    EXPECT_GT(result.moves_accepted, 0);
+    EXPECT_LT(result.max_energy_mismatch, 1e-6 * result.breakdown.total());
+    EXPECT_NEAR(result.energy_per_cycle.back(), result.breakdown.total(),
+                1e-6 * result.breakdown.total());
+    EXPECT_LT(result.breakdown.total(), result.initial_energy);
+  }
+}
+
+TEST(AlphaExpansion, SkippingUnchangedLabelsDoesNotChangeTheAnswer) {
+  const testing::SceneProblem scene = MakeScene(40, 30, 12, 5, 8.0f, 0.03);
+  const MrfProblem problem = scene.problem.View();
+  for (CandidateLabels mode : {CandidateLabels::kAll, CandidateLabels::kLocal}) {
+    ExpansionOptions with = PlainOptions();
+    with.candidate_labels = mode;
+    with.candidate_block_px = 8;
+    ExpansionOptions without = with;
+    without.skip_unchanged_labels = false;
+    with.prune_pixels = without.prune_pixels = false;  // compare labels bit for bit
+    const ExpansionResult a = AlphaExpansion(problem, EnergyOptions(), with);
+    const ExpansionResult b = AlphaExpansion(problem, EnergyOptions(), without);
+    EXPECT_EQ(cv::norm(a.labels, b.labels, cv::NORM_INF), 0.0);
+    EXPECT_EQ(a.breakdown.total(), b.breakdown.total());
+    EXPECT_LT(a.moves_tried, b.moves_tried);
+  }
+}
+
+TEST(AlphaExpansion, PruningPixelsDoesNotChangeTheEnergy) {
+  for (std::uint32_t seed : {5u, 6u, 7u}) {
+    const testing::SceneProblem scene = MakeScene(40, 30, 12, seed, 8.0f, 0.03);
+    const MrfProblem problem = scene.problem.View();
+    ExpansionOptions with = PlainOptions();
+    ExpansionOptions without = with;
+    without.prune_pixels = false;
+    const ExpansionResult a = AlphaExpansion(problem, EnergyOptions(), with);
+    const ExpansionResult b = AlphaExpansion(problem, EnergyOptions(), without);
+    // Pruning keeps the set of optimal moves; max-flow may pick another optimum among ties, so
+    // compare energies (and they are almost always the same labels).
+    EXPECT_NEAR(a.breakdown.total(), b.breakdown.total(), 1e-9 * b.breakdown.total());
+    EXPECT_GT(a.pixels_pruned, 0);
+    EXPECT_LT(a.graph_nodes, b.graph_nodes);
+  }
+}
+
+TEST(AlphaExpansion, LocalCandidatesStayCloseToPlainExpansion) {
+  const testing::SceneProblem scene = MakeScene(64, 48, 24, 21, 6.0f, 0.01);
+  const MrfProblem problem = scene.problem.View();
+  ExpansionOptions plain = PlainOptions();
+  plain.verify_moves = false;
+  ExpansionOptions local = plain;
+  local.candidate_labels = CandidateLabels::kLocal;
+  const ExpansionResult a = AlphaExpansion(problem, EnergyOptions(), plain);
+  const ExpansionResult b = AlphaExpansion(problem, EnergyOptions(), local);
+  const double gap = (b.breakdown.total() - a.breakdown.total()) / a.breakdown.total();
+  EXPECT_LT(gap, 0.005) << a.Summary() << "\n" << b.Summary();
+  EXPECT_LT(b.graph_nodes, a.graph_nodes);
+}
+
+TEST(AlphaExpansion, DeterministicAndStartsFromGivenLabels) {
+  const testing::SceneProblem scene = MakeScene(30, 20, 10, 8);
+  const MrfProblem problem = scene.problem.View();
+  const ExpansionResult a = AlphaExpansion(problem, EnergyOptions(), ExpansionOptions());
+  const ExpansionResult b = AlphaExpansion(problem, EnergyOptions(), ExpansionOptions());
+  ASSERT_EQ(a.labels.size(), b.labels.size());
+  EXPECT_EQ(std::memcmp(a.labels.data, b.labels.data, a.labels.total() * sizeof(int)), 0);
+  // Starting from the optimum of a run: nothing to improve.
+  ExpansionOptions options;
+  options.convergence_tolerance = 0.0;
+  const ExpansionResult c = AlphaExpansion(problem, EnergyOptions(), options);
+  const ExpansionResult d = AlphaExpansion(problem, EnergyOptions(), options, c.labels);
+  EXPECT_EQ(d.moves_accepted, 0);
+  EXPECT_EQ(d.breakdown.total(), c.breakdown.total());
+}
+
+TEST(AlphaExpansion, RejectsBadInput) {
+  const OwnedMrfProblem owned = RandomProblem(4, 3, 3, 1);
+  try {
+    AlphaExpansion(owned.View(), EnergyOptions(), ExpansionOptions(),
+                   cv::Mat(3, 4, CV_32S, cv::Scalar(5)));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(),
+                 "AlphaExpansion: the initial labelling has labels in [5, 5], outside [0, 3)");
+  }
+  ExpansionOptions options;
+  options.max_cycles = 0;
+  try {
+    AlphaExpansion(owned.View(), EnergyOptions(), options);
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "optimizer.max_cycles = 0. Violated constraint: >= 1");
+  }
+  EXPECT_THROW(ParseCandidateLabels("some"), ConfigError);
+}
+
+TEST(AlphaExpansion, ProgressCanCancel) {
+  const testing::SceneProblem scene = MakeScene(30, 20, 10, 9);
+  int calls = 0;
+  const ExpansionResult result =
+      AlphaExpansion(scene.problem.View(), EnergyOptions(), PlainOptions(), {}, [&](double f) {
+        EXPECT_GE(f, 0.0);
+        EXPECT_LE(f, 1.0);
+        return ++calls < 3;
+      });
+  EXPECT_TRUE(result.cancelled);
+  EXPECT_FALSE(result.converged);
+  EXPECT_EQ(calls, 3);
+  EXPECT_LE(result.breakdown.total(), result.initial_energy);
+}
+
+}  // namespace
+}  // namespace gcpstereo::optimize
