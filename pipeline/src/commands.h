@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "gcpstereo/pipeline/evaluate.h"
+
 namespace CLI {
 class App;
 }
@@ -34,16 +36,7 @@ int Demo(const DemoArgs& args);
 
 int Keys();
 
-struct EvalArgs {
-  std::string output_folder;  // a finished run's folder (reads depth.pfm/disparity.pfm)
-  std::string depth;          // or a depth map (PFM)
-  std::string disparity;      // or a disparity map (PFM)
-  std::string gt_depth, gt_sigma, gt_disparity, gt_disparity_right;
-  std::string mask_nonocc, mask_all, mask_disc;
-  double gt_disparity_scale = 1.0;
-  int border_px = 0;
-  std::string report;  // where to write the JSON report (default: stdout only)
-};
+using EvalArgs = pipeline::EvalRequest;
 void AddEvalOptions(CLI::App* eval, EvalArgs* args);
 int Eval(const EvalArgs& args);
 

@@ -52,6 +52,9 @@ int main(int argc, char** argv) {
   run->add_option("--set", run_args.overrides,
                   "override one dotted key, KEY=VALUE with VALUE parsed as YAML "
                   "(e.g. --set dataset.neighbors=[im1,im3]); repeatable");
+  run->footer("Every configuration key, with its default, range and unit: gcpstereo keys\n"
+              "Outputs: depth.pfm, disparity.pfm (rectified data), gcps.ply, mesh.ply, mesh.obj, "
+              "report.json,\neffective_config.yaml, *.png previews, index.html and run.log.");
 
   gcpstereo::cli::SynthArgs synth_args;
   CLI::App* synth = app.add_subcommand("synth", "write a synthetic data set with exact ground truth");

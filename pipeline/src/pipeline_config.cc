@@ -54,21 +54,171 @@ void PipelineConfig::Register(config::Schema* s) {
           "≈0.4 %)",
           "px", "s"});
 
+  s->Add("labels.auto.gcp_low_percentile", &label_range.gcp_low_percentile, Range::Between(0, 100),
+         {"automatic range from GCPs: lower percentile of their depths", "%"});
+  s->Add("labels.auto.gcp_high_percentile", &label_range.gcp_high_percentile,
+         Range::Between(0, 100), {"automatic range from GCPs: upper percentile", "%"});
+  s->Add("labels.auto.margin", &label_range.margin, Range::AtLeast(0.0),
+         {"automatic range: widen the span by this fraction on each side"});
+  s->Add("labels.auto.grid_step_px", &label_range.grid_step_px, Range::Between(1, 1024),
+         {"automatic range from the views' overlap: reference rays sampled every n pixels", "px"});
+  s->Add("labels.auto.min_neighbors", &label_range.min_neighbors, Range::AtLeast(1),
+         {"automatic range from the views' overlap: depths seen by at least this many neighbours"});
+  s->Add("labels.auto.max_depth", &label_range.max_depth, Range::GreaterThanOrInfinite(0.0),
+         {"automatic range: never beyond this depth (data set unit)", "m"});
+
+  // gcp.lidar.* and gcp.stereo.*: the gcp module's options (see gcp_sources.h, stereo_gcps.h).
+  s->Add("gcp.lidar.consistency_radius_px", &gcp.lidar.consistency_radius_px, Range::Between(0, 20),
+         {"half-size of the window of the depth-consistency test (0 = z-buffer only)", "px"});
+  s->Add("gcp.lidar.max_surface_slant_deg", &gcp.lidar.max_surface_slant_deg,
+         Range{0.0, 90.0, false, false},
+         {"steepest surface slant the consistency test tolerates", "deg"});
+  s->Add("gcp.lidar.depth_tolerance", &gcp.lidar.depth_tolerance, Range::AtLeast(0.0),
+         {"absolute depth tolerance of the consistency test", "m"});
+  s->Add("gcp.lidar.sigma_multiplier", &gcp.lidar.sigma_multiplier, Range::AtLeast(0.0),
+         {"multiple of a point's sigma added to the consistency tolerance"});
+  s->Add("gcp.lidar.default_sigma", &gcp.lidar.default_sigma, Range::AtLeast(0.0),
+         {"sigma of points whose cloud carries none (HDL-64E ≈ 0.02)", "m"});
+  s->Add("gcp.lidar.min_depth", &gcp.lidar.min_depth, Range::AtLeast(0.0),
+         {"ignore points nearer than this depth", "m"});
+  s->Add("gcp.stereo.max_spread_px", &gcp.stereo.max_spread_px, Range::Between(0, 10),
+         {"the three WTA disparities (BT, NCC, adaptive weights) must agree within this", "px"});
+  s->Add("gcp.stereo.lr_tolerance_px", &gcp.stereo.lr_tolerance_px, Range::Between(0, 10),
+         {"left-right check tolerance", "px"});
+  s->Add("gcp.stereo.canny_low", &gcp.stereo.canny_low, Range::AtLeast(0.0),
+         {"Canny lower threshold (grey levels)"});
+  s->Add("gcp.stereo.canny_high", &gcp.stereo.canny_high, Range::AtLeast(0.0),
+         {"Canny upper threshold (grey levels)"});
+  s->Add("gcp.stereo.edge_margin_px", &gcp.stereo.edge_margin_px, Range::Between(0, 20),
+         {"drop candidates within this distance of a Canny edge", "px"});
+  s->Add("gcp.stereo.ncc_window_px", &gcp.stereo.ncc_window_px, Range::Between(3, 15),
+         {"NCC window side, odd (paper: 5)", "px"});
+  s->Add("gcp.stereo.aw_window_px", &gcp.stereo.aw_window_px, Range::Between(3, 71),
+         {"adaptive-weight window side, odd", "px"});
+  s->Add("gcp.stereo.aw_stride_px", &gcp.stereo.aw_stride_px, Range::Between(1, 4),
+         {"adaptive-weight window sampling stride (speed approximation)", "px"});
+  s->Add("gcp.stereo.aw_gamma_c", &gcp.stereo.aw_gamma_c, Range::GreaterThan(0.0),
+         {"adaptive-weight colour bandwidth (Yoon & Kweon: 5)", "", "γc"});
+  s->Add("gcp.stereo.aw_gamma_p", &gcp.stereo.aw_gamma_p, Range::GreaterThan(0.0),
+         {"adaptive-weight spatial bandwidth (Yoon & Kweon: 17.5)", "px", "γp"});
+  s->Add("gcp.stereo.aw_truncation", &gcp.stereo.aw_truncation, Range::GreaterThan(0.0),
+         {"adaptive-weight cost truncation (Yoon & Kweon: 40)"});
+  s->Add("gcp.stereo.sigma_px", &gcp.stereo.sigma_px, Range::AtLeast(0.0),
+         {"standard deviation attributed to a stereo GCP", "px"});
+
+  s->Add("cost.method", &cost.method, {"auto", "plane_sweep", "birchfield_tomasi"},
+         {"matching cost: auto = Birchfield–Tomasi for a rectified pair, plane sweep otherwise"});
+  s->Add("cost.truncation", &cost.plane_sweep.truncation, Range::GreaterThan(0.0),
+         {"plane sweep: per-neighbour truncation of the RGB difference norm", "RGB grey levels",
+          "τ"});
+  s->Add("cost.aggregation", &cost.plane_sweep.aggregation, {"mean", "best_k"},
+         {"plane sweep: mean over the neighbours (paper) or mean of the best k (occlusions)"});
+  s->Add("cost.best_k", &cost.plane_sweep.best_k, Range::AtLeast(1),
+         {"plane sweep: k of best_k aggregation"});
+  s->Add("cost.min_voters", &cost.plane_sweep.min_voters, Range::AtLeast(1),
+         {"plane sweep: neighbours that must see a sample for it to have data"});
+  s->Add("cost.bt_truncation", &cost.birchfield_tomasi.truncation, Range::GreaterThan(0.0),
+         {"Birchfield–Tomasi: truncation of the summed RGB dissimilarity", "grey levels"});
+  s->Add("cost.bt_channels", &cost.birchfield_tomasi.channels, {"sum", "max"},
+         {"Birchfield–Tomasi: combine the RGB channels by sum or max"});
+
+  s->Add("propagation.gamma", &propagation.gamma, Range::GreaterThan(0.0),
+         {"colour bandwidth of the affinities w = exp(−|ΔRGB|/γ) (paper: 1.25)", "RGB", "γ"});
+  s->Add("propagation.epsilon", &propagation.epsilon, Range::HalfOpen(0.0, 1.0),
+         {"lower bound of the affinities (paper: 0 for edge-preserving interpolation)", "", "ε"});
+  s->Add("propagation.min_weight", &propagation.min_weight, Range::Between(0.0, 1.0),
+         {"links weaker than this are cut (regions without a GCP are then reported unreached)"});
+  s->Add("propagation.solver", &propagation.solver, {"umfpack", "cholmod"},
+         {"sparse solver: UMFPACK on eq. 5 as in the paper, or CHOLMOD on its symmetric form"});
+  s->Add("propagation.ordering", &propagation.ordering, {"nested_dissection", "solver"},
+         {"fill-reducing ordering: geometric nested dissection of the grid or the solver's own"});
+
+  s->Add("optimizer.lambda_s", &optimizer.energy.lambda_s, Range::AtLeast(0.0),
+         {"smoothness weight of eq. 3 (paper: 20)", "energy per label step", "λs"});
+  s->Add("optimizer.truncation", &optimizer.energy.truncation, Range::GreaterThan(0.0),
+         {"truncation of the linear smoothness penalty (paper: 2)", "label steps", "T"});
+  s->Add("optimizer.gamma_c", &optimizer.energy.gamma_c, Range::GreaterThan(0.0),
+         {"colour bandwidth of the smoothness weights, eq. 4 (paper: 3.6)", "RGB", "γc"});
+  s->Add("optimizer.epsilon", &optimizer.energy.epsilon, Range::Between(0.0, 1.0),
+         {"lower bound of the smoothness weights, eq. 4 (paper: 0.3)", "", "ε"});
+  s->Add("optimizer.lambda_r", &optimizer.energy.lambda_r, Range::AtLeast(0.0),
+         {"weight of the GCP energy, eq. 8 (paper: 8)", "", "λr"});
+  s->Add("optimizer.gamma_d", &optimizer.energy.gamma_d, Range::GreaterThan(0.0),
+         {"sharpness of the robust GCP penalty, eq. 7 (paper: 2)", "label steps", "γd"});
+  s->Add("optimizer.eta", &optimizer.energy.eta, Range{0.0, 1.0, false, false},
+         {"upper-bound control of the robust GCP penalty, eq. 7 (lost from the paper's text)", "",
+          "η"});
+  s->Add("optimizer.data_weight", &optimizer.energy.data_weight, Range::GreaterThan(0.0),
+         {"scale of the matching costs in the energy"});
+  s->Add("optimizer.use_gcp_energy", &optimizer.energy.use_gcp_energy,
+         {"include E_gcp (false = the paper's baseline D, even with GCPs configured)"});
+  s->Add("optimizer.max_cycles", &optimizer.expansion.max_cycles, Range::AtLeast(1),
+         {"maximum α-expansion cycles over all labels"});
+  s->Add("optimizer.convergence_tolerance", &optimizer.expansion.convergence_tolerance,
+         Range::HalfOpen(0.0, 1.0),
+         {"stop when a cycle lowers the energy by less than this fraction (0 = until no move "
+          "improves)"});
+  s->Add("optimizer.candidate_labels", &optimizer.candidate_labels, {"all", "local"},
+         {"α-moves over all labels, or per block over labels near the block's WTA votes and D̂"});
+  s->Add("optimizer.candidate_block", &optimizer.expansion.candidate_block_px, Range::AtLeast(4),
+         {"block side of the local candidate sets", "px"});
+  s->Add("optimizer.candidate_radius", &optimizer.expansion.candidate_radius, Range::AtLeast(0),
+         {"labels within this many steps of a voted label are candidates", "label steps"});
+  s->Add("optimizer.candidate_min_votes", &optimizer.expansion.candidate_min_votes,
+         Range::AtLeast(1), {"WTA votes that make a label a candidate"});
+  s->Add("optimizer.skip_unchanged_labels", &optimizer.expansion.skip_unchanged_labels,
+         {"skip α-moves that cannot find a different cut (exact)"});
+  s->Add("optimizer.prune_pixels", &optimizer.expansion.prune_pixels,
+         {"leave out of a move pixels that provably keep their label (exact)"});
+  s->Add("optimizer.initialization", &optimizer.initialization, {"wta", "prior"},
+         {"initial labelling: winner-take-all, or the propagated D̂ where it exists"});
+  s->Add("optimizer.blend", &optimizer.blend, {"mean", "feather"},
+         {"merging of the tile overlaps: mean (paper) or linear feathering"});
+  s->Add("optimizer.refinement", &optimizer.refinement_method, {"none", "parabola", "ceres"},
+         {"sub-label refinement after graph cuts"});
+  s->Add("optimizer.refinement_iterations", &optimizer.refinement.max_iterations,
+         Range::AtLeast(1), {"Ceres refinement: maximum iterations"});
+  s->Add("optimizer.refinement_huber", &optimizer.refinement.smoothness_huber,
+         Range::GreaterThan(0.0), {"Ceres refinement: Huber width of the smoothness term",
+                                   "label steps"});
+  s->Add("optimizer.refinement_min_curvature", &optimizer.refinement.min_data_curvature,
+         Range::GreaterThan(0.0), {"Ceres refinement: smallest curvature of the local data model"});
+
   s->Add("optimizer.tiles", &tiling.tiles, 2, Range::Between(1, 64),
          {"[rows, cols] of tiles for graph cuts (paper: [2, 2])"});
   s->Add("optimizer.tile_overlap", &tiling.tile_overlap, Range::Between(0, 1024),
          {"overlap between neighbouring tiles (paper: 16)", "px"});
+
+  s->Add("eval.lidar_holdout", &eval.lidar_holdout,
+         {"score against held-out LiDAR points: a checkerboard of blocks splits the projected "
+          "scan into GCPs and scoring points"});
+  s->Add("eval.holdout_block_px", &eval.holdout_block_px, Range::Between(1, 256),
+         {"block side of the held-out checkerboard", "px"});
 
   s->Add("runtime.threads", &runtime.threads, Range::Between(0, 1024),
          {"worker threads; 0 = all cores. Results do not depend on it"});
   s->Add("runtime.log_level", &runtime.log_level,
          {"trace", "debug", "info", "warn", "error", "off"}, {"terminal log level"});
 
+  s->Add("runtime.stop_after", &runtime.stop_after, {"load", "gcps", "propagation", "all"},
+         {"stop after this stage (report.json and effective_config.yaml are still written): "
+          "load checks the data set and range data, gcps also builds the GCPs"});
+
   s->Add("output.previews", &output.previews, {"write the PNG previews and index.html"});
   s->Add("output.mesh", &output.mesh, {"write mesh.ply and mesh.obj"});
 }
 
 void PipelineConfig::Check() const {
+  // The stage options' own checks (cross-field constraints; ranges are checked while loading).
+  gcp.lidar.Check();
+  gcp.stereo.Check();
+  cost.plane_sweep.Check();
+  cost.birchfield_tomasi.Check();
+  label_range.Check();
+  propagation.Check();
+  optimizer.energy.Check();
+  optimizer.expansion.Check();
+  optimizer.refinement.Check();
   if (dataset.path.empty()) {
     throw ConfigError("dataset.path is required (the data set's folder)");
   }
@@ -88,6 +238,10 @@ void PipelineConfig::Check() const {
     throw ConfigError(ViolatedConstraint("labels.space", "disparity",
                                          "depth or inverse_depth for calibrated (strecha) data; "
                                          "disparity needs rectified data"));
+  }
+  if (eval.lidar_holdout &&
+      std::find(gcp.sources.begin(), gcp.sources.end(), "lidar") == gcp.sources.end()) {
+    throw ConfigError("eval.lidar_holdout needs lidar in gcp.sources");
   }
   std::vector<std::string> seen;
   for (const auto& source : gcp.sources) {

@@ -1,18 +1,32 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// `gcpstereo run`: load → GCPs → labels → propagation (D̂) → cost + graph cuts per tile →
+// depth/disparity → mesh → evaluation → outputs (../shared/CONTRACT.md).
 #include "gcpstereo/pipeline/run.h"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
-#include <fstream>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
+#include "gcpstereo/core/progress.h"
 #include "gcpstereo/core/system.h"
+#include "gcpstereo/cost/birchfield_tomasi.h"
+#include "gcpstereo/cost/label_range.h"
+#include "gcpstereo/cost/plane_sweep.h"
 #include "gcpstereo/io/atomic_file.h"
 #include "gcpstereo/io/dataset_io.h"
+#include "gcpstereo/io/image_io.h"
+#include "gcpstereo/io/pfm.h"
 #include "gcpstereo/io/point_cloud_io.h"
+#include "gcpstereo/io/preview.h"
+#include "gcpstereo/optimize/tiling.h"
 #include "gcpstereo/pipeline/output_folder.h"
+#include "gcpstereo/propagation/propagation.h"
+#include "stages.h"
 
 namespace gcpstereo::pipeline {
 namespace {
@@ -31,13 +45,13 @@ void WriteText(const std::string& path, const std::string& text) {
 class StageClock {
  public:
   StageClock(json* stages, std::string name) : stages_(stages), name_(std::move(name)) {
-    spdlog::info("stage {}: started", name_);
+    spdlog::info("{} …", name_);
   }
   void Done(json extra = json::object()) {
     extra["seconds"] = timer_.ElapsedSeconds();
     extra["peak_memory_bytes_after"] = PeakResidentMemoryBytes();
     (*stages_)[name_] = extra;
-    spdlog::info("stage {}: {:.2f} s", name_, extra["seconds"].get<double>());
+    spdlog::info("{}: {:.2f} s", name_, extra["seconds"].get<double>());
   }
 
  private:
@@ -46,6 +60,21 @@ class StageClock {
   Timer timer_;
 };
 
+// Depth preview with a range shared by every depth picture of the run.
+cv::Mat DepthPreview(const cv::Mat& depth, double lo, double hi) {
+  return io::RenderDepthPreview(depth, lo, hi, "m");
+}
+
+optimize::ExpansionOptions ExpansionOptionsOf(const PipelineConfig& options) {
+  optimize::ExpansionOptions expansion = options.optimizer.expansion;
+  expansion.candidate_labels = optimize::ParseCandidateLabels(options.optimizer.candidate_labels);
+  expansion.initialization = options.optimizer.initialization == "prior"
+                                 ? optimize::Initialization::kPrior
+                                 : optimize::Initialization::kWinnerTakeAll;
+  expansion.num_threads = options.runtime.threads;
+  return expansion;
+}
+
 }  // namespace
 
 RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir,
@@ -53,6 +82,11 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   const PipelineConfig& options = config.options();
   Timer total;
   OutputFolder out(output_dir);
+  AddLogFile(out.FinalPath("run.log"));
+  struct LogFileGuard {
+    ~LogFileGuard() { RemoveLogFiles(); }
+  } log_file_guard;
+
   json report;
   report["gcpstereo_version"] = GCPSTEREO_VERSION;
   report["config"] = config_path;
@@ -68,47 +102,262 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   request.neighbors = options.dataset.neighbors;
   request.scale = options.dataset.scale;
   const Dataset dataset = io::LoadDataset(request);
+  const View& reference = dataset.reference;
+  const cv::Size size = reference.image.size();
   json views = json::array();
   for (const auto& n : dataset.neighbors) views.push_back(ViewJson(n));
   report["dataset"] = {{"format", dataset.format},
                        {"path", dataset.path},
                        {"rectified", dataset.rectified},
-                       {"reference", ViewJson(dataset.reference)},
+                       {"reference", ViewJson(reference)},
                        {"neighbors", views},
                        {"num_views", 1 + dataset.neighbors.size()},
                        {"ground_truth",
                         {{"depth", dataset.ground_truth.HasDepth()},
+                         {"sigma", !dataset.ground_truth.sigma.empty()},
                          {"disparity", dataset.ground_truth.HasDisparity()}}}};
-  spdlog::info("loaded {} views: reference {} ({}x{}) and {} neighbours", 1 + dataset.neighbors.size(),
-               dataset.reference.name, dataset.reference.image.cols, dataset.reference.image.rows,
+  spdlog::info("loaded {} views: reference {} ({}x{}) and {} neighbours",
+               1 + dataset.neighbors.size(), reference.name, size.width, size.height,
                dataset.neighbors.size());
-
-  // Range sensors named by the configuration.
-  PointCloud lidar;
-  for (const auto& source : options.gcp.sources) {
-    if (source == "lidar") {
-      lidar = io::ReadPointCloud(options.gcp.lidar_path);
-      report["lidar"] = {{"path", options.gcp.lidar_path}, {"num_points", lidar.size()},
-                         {"has_sigma", !lidar.sigma.empty()}};
-      spdlog::info("loaded {} LiDAR points from {}", lidar.size(), options.gcp.lidar_path);
-    }
+  if (dataset.neighbors.empty()) {
+    throw ConfigError("dataset.neighbors: no neighbour view to match the reference against");
   }
   load_clock.Done();
 
-  report["peak_memory_bytes"] = PeakResidentMemoryBytes();
-  report["total_seconds"] = total.ElapsedSeconds();
+  // Writes the report and the effective configuration and moves every output into place.
+  auto finish = [&](const std::vector<std::string>& images) {
+    report["peak_memory_bytes"] = PeakResidentMemoryBytes();
+    report["total_seconds"] = total.ElapsedSeconds();
+    if (options.output.previews && !images.empty()) {
+      WriteText(out.Path("index.html"), internal::MakeIndexHtml(report, images));
+    }
+    WriteText(out.Path("effective_config.yaml"), config.schema().ToYaml());
+    const std::string report_text = report.dump(2) + "\n";
+    WriteText(out.Path("report.json"), report_text);
+    out.Commit();
+    RunSummary summary;
+    summary.output_dir = output_dir;
+    summary.total_seconds = total.ElapsedSeconds();
+    summary.peak_memory_bytes = PeakResidentMemoryBytes();
+    summary.report_json = report_text;
+    summary.terminal_summary = internal::TerminalSummary(report);
+    return summary;
+  };
+  const std::string& stop_after = options.runtime.stop_after;
+  if (stop_after == "load") {
+    // The range data named by the configuration is read too, so that it is validated.
+    if (!options.gcp.lidar_path.empty()) {
+      report["lidar"] = {{"path", options.gcp.lidar_path},
+                         {"num_points", io::ReadPointCloud(options.gcp.lidar_path).size()}};
+    }
+    return finish({});
+  }
 
-  WriteText(out.Path("effective_config.yaml"), config.schema().ToYaml());
-  const std::string report_text = report.dump(2) + "\n";
-  WriteText(out.Path("report.json"), report_text);
-  out.Commit();
+  // 2. Labels (from the configuration or the views) and ground control points.
+  StageClock gcp_clock(&stages, "gcps");
+  const LabelSpaceKind kind = ParseLabelSpaceKind(options.labels.space);
+  if (kind == LabelSpaceKind::kDisparity && !dataset.rectified) {
+    throw ConfigError("labels.space = disparity needs rectified data (middlebury, kitti_raw)");
+  }
+  // Stereo GCPs search the label range before any GCP exists: it comes from the configuration or
+  // the views' overlap then.
+  LabelSpace provisional;
+  if (std::find(options.gcp.sources.begin(), options.gcp.sources.end(), "stereo") !=
+      options.gcp.sources.end()) {
+    provisional = cost::MakeLabelSpace(kind, options.labels.count, options.labels.min,
+                                       options.labels.max, GcpSet{}, reference, dataset.neighbors,
+                                       dataset.disparity_numerator, options.label_range);
+  }
+  internal::GcpStageResult gcp_stage = internal::RunGcpStage(options, dataset, provisional);
+  const GcpSet& gcps = gcp_stage.gcps;
+  report["gcps"] = gcp_stage.report;
+  gcp_clock.Done({{"count", gcps.size()}});
+  if (stop_after == "gcps") {
+    io::WriteGcpsPly(out.Path("gcps.ply"), gcps, reference.camera);
+    return finish({});
+  }
 
-  RunSummary summary;
-  summary.output_dir = output_dir;
-  summary.total_seconds = total.ElapsedSeconds();
-  summary.peak_memory_bytes = PeakResidentMemoryBytes();
-  summary.report_json = report_text;
-  return summary;
+  cost::LabelRangeSummary range_summary;
+  const LabelSpace labels = cost::MakeLabelSpace(
+      kind, options.labels.count, options.labels.min, options.labels.max, gcps, reference,
+      dataset.neighbors, dataset.disparity_numerator, options.label_range, &range_summary);
+  report["labels"] = {{"space", LabelSpaceKindName(labels.kind())},
+                      {"count", labels.count()},
+                      {"min", labels.min()},
+                      {"max", labels.max()},
+                      {"step", labels.step()},
+                      {"range_source", range_summary.source},
+                      {"depth_of_first_label", labels.DepthOfLabel(0)},
+                      {"depth_of_last_label", labels.DepthOfLabel(labels.count() - 1)}};
+  spdlog::info("labels: {} {} from {} to {} (range from {})", labels.count(),
+               LabelSpaceKindName(labels.kind()), labels.min(), labels.max(), range_summary.source);
+
+  // 3. Adaptive propagation of the GCPs (eq. 5): the prior D̂ of the GCP energy, in labels.
+  const bool use_gcp_energy = options.optimizer.energy.use_gcp_energy && !gcps.empty();
+  cv::Mat prior;
+  if (!gcps.empty()) {
+    StageClock clock(&stages, "propagation");
+    const cv::Mat sparse = internal::SparseGcpLabels(gcps, labels, size);
+    const propagation::PropagationResult propagated =
+        propagation::Propagate(reference.image, sparse, options.propagation);
+    prior = propagated.values;
+    const double unreached_percent = 100.0 * propagated.num_unreached_pixels / size.area();
+    if (propagated.num_unreached_pixels > 0) {
+      spdlog::warn("propagation: {} pixels ({:.1f} %) in {} regions no GCP reaches have no prior",
+                   propagated.num_unreached_pixels, unreached_percent,
+                   propagated.num_unreached_regions);
+    }
+    clock.Done({{"solver", propagated.solver},
+                {"gcps", propagated.num_gcps},
+                {"unknowns", propagated.num_unknowns},
+                {"unreached_pixels", propagated.num_unreached_pixels},
+                {"unreached_percent", unreached_percent},
+                {"unreached_regions", propagated.num_unreached_regions},
+                {"setup_seconds", propagated.setup_seconds},
+                {"solve_seconds", propagated.solve_seconds},
+                {"residual", propagated.residual}});
+  }
+
+  if (stop_after == "propagation") {
+    io::WriteGcpsPly(out.Path("gcps.ply"), gcps, reference.camera);
+    return finish({});
+  }
+
+  // 4–5. Matching costs and global optimisation, tile by tile (memory follows the tile).
+  const std::string cost_method =
+      options.cost.method != "auto"
+          ? options.cost.method
+          : (dataset.rectified && dataset.neighbors.size() == 1 ? "birchfield_tomasi"
+                                                                 : "plane_sweep");
+  std::vector<double> pair_disparities;
+  const View* pair_neighbor = nullptr;
+  if (cost_method == "birchfield_tomasi") {
+    const internal::RectifiedPair pair = internal::FindRectifiedPair(dataset, "cost.method");
+    pair_neighbor = pair.neighbor;
+    for (int l = 0; l < labels.count(); ++l) {
+      const double depth = labels.DepthOfLabel(l);
+      pair_disparities.push_back(std::isfinite(depth) ? pair.numerator / depth : 0.0);
+    }
+  }
+  optimize::EnergyOptions energy = options.optimizer.energy;
+  energy.use_gcp_energy = use_gcp_energy;
+  optimize::TilingOptions tiling;
+  tiling.rows = options.tiling.tiles[0];
+  tiling.cols = options.tiling.tiles[1];
+  tiling.overlap_px = options.tiling.tile_overlap;
+  tiling.blend = options.optimizer.blend;
+  const optimize::ExpansionOptions expansion = ExpansionOptionsOf(options);
+
+  StageClock optimize_clock(&stages, "cost_and_optimization");
+  auto make_problem = [&](const cv::Rect& region) {
+    optimize::OwnedMrfProblem problem;
+    if (cost_method == "birchfield_tomasi") {
+      problem.data = cost::ComputeBirchfieldTomasiCost(
+          reference.image, pair_neighbor->image, pair_disparities, region,
+          options.cost.birchfield_tomasi);
+    } else {
+      problem.data = cost::ComputePlaneSweepCost(reference, dataset.neighbors, labels, region,
+                                                 options.cost.plane_sweep);
+    }
+    problem.image = reference.image(region).clone();
+    if (use_gcp_energy) problem.prior = prior(region).clone();
+    return problem;
+  };
+  optimize::TiledResult optimized;
+  {
+    ProgressBar bar("graph cuts", 1000);
+    optimize::RefinementOptions refinement = options.optimizer.refinement;
+    refinement.method = optimize::ParseRefinementMethod(options.optimizer.refinement_method);
+    optimized = optimize::OptimizeTiled(size, make_problem, energy, expansion, tiling, {},
+                                        bar.AsCallback(), refinement);
+  }
+  json tiles = json::array();
+  for (const auto& tile : optimized.tiles) {
+    const auto& e = tile.expansion;
+    tiles.push_back({{"region", {tile.region.x, tile.region.y, tile.region.width,
+                                 tile.region.height}},
+                     {"cost_seconds", tile.setup_seconds},
+                     {"expansion_seconds", e.time_seconds},
+                     {"initial_energy", e.initial_energy},
+                     {"energy_per_cycle", e.energy_per_cycle},
+                     {"energy", {{"data", e.breakdown.data},
+                                 {"smooth", e.breakdown.smooth},
+                                 {"gcp", e.breakdown.gcp},
+                                 {"total", e.breakdown.total()}}},
+                     {"cycles", e.cycles},
+                     {"converged", e.converged},
+                     {"moves_tried", e.moves_tried},
+                     {"moves_skipped", e.moves_skipped},
+                     {"refinement",
+                      {{"method", optimize::RefinementMethodName(tile.refinement.method)},
+                       {"pixels_moved", tile.refinement.pixels_moved},
+                       {"mean_abs_offset", tile.refinement.mean_abs_offset},
+                       {"iterations", tile.refinement.iterations},
+                       {"converged", tile.refinement.solver_converged},
+                       {"seconds", tile.refinement.time_seconds}}}});
+  }
+  optimize_clock.Done({{"cost_method", cost_method},
+                       {"gcp_energy", use_gcp_energy},
+                       {"tiles", tiles},
+                       {"energy_sum", optimized.energy_sum}});
+
+  // 6. Depth (and disparity) maps.
+  const cv::Mat depth = internal::LabelMapToDepth(optimized.labels, labels);
+  cv::Mat disparity;
+  if (dataset.rectified) {
+    disparity = internal::LabelMapToDisparity(optimized.labels, labels, dataset.disparity_numerator);
+  }
+  cv::Mat prior_depth, prior_disparity;
+  if (!prior.empty()) {
+    prior_depth = internal::LabelMapToDepth(prior, labels);
+    if (dataset.rectified) {
+      prior_disparity =
+          internal::LabelMapToDisparity(prior, labels, dataset.disparity_numerator);
+    }
+  }
+
+  // Evaluation against the data set's ground truth.
+  std::vector<std::pair<std::string, cv::Mat>> previews;
+  {
+    StageClock clock(&stages, "evaluation");
+    internal::EvaluationInputs inputs;
+    inputs.depth_maps.emplace_back("result", depth);
+    if (!prior_depth.empty()) inputs.depth_maps.emplace_back("propagated", prior_depth);
+    if (dataset.rectified) {
+      inputs.disparity_maps.emplace_back("result", disparity);
+      if (!prior_disparity.empty()) inputs.disparity_maps.emplace_back("propagated", prior_disparity);
+    }
+    inputs.lidar_holdout = &gcp_stage.lidar_holdout;
+    inputs.holdout_in_disparity = gcp_stage.holdout_in_disparity;
+    report["metrics"] = internal::Evaluate(dataset, inputs, &previews);
+    clock.Done();
+  }
+
+  // 7. Outputs, staged and moved into place at the end.
+  StageClock write_clock(&stages, "write");
+  io::WritePfm(out.Path("depth.pfm"), depth);
+  if (dataset.rectified) io::WritePfm(out.Path("disparity.pfm"), disparity);
+  io::WriteGcpsPly(out.Path("gcps.ply"), gcps, reference.camera);
+  std::vector<std::string> images;
+  if (options.output.previews) {
+    double lo = labels.DepthOfLabel(0), hi = labels.DepthOfLabel(labels.count() - 1);
+    if (lo > hi) std::swap(lo, hi);
+    if (!std::isfinite(hi)) io::RobustValueRange(depth, &lo, &hi);
+    auto add = [&](const std::string& name, const cv::Mat& image) {
+      io::WritePng(out.Path(name), image);
+      images.push_back(name);
+    };
+    add("depth.png", DepthPreview(depth, lo, hi));
+    if (!prior_depth.empty()) add("propagated.png", DepthPreview(prior_depth, lo, hi));
+    add("gcps.png", internal::RenderGcpOverlay(reference.image, gcps));
+    if (dataset.ground_truth.HasDepth()) {
+      add("ground_truth.png", DepthPreview(dataset.ground_truth.depth, lo, hi));
+    }
+    for (const auto& [name, image] : previews) add(name, image);
+  }
+  write_clock.Done();
+
+  return finish(images);
 }
 
 }  // namespace gcpstereo::pipeline

@@ -97,7 +97,7 @@ TEST_F(SchemaTest, OutOfRangeNamesKeyValueAndBound) {
 
 TEST_F(SchemaTest, WrongTypesAreRejected) {
   EXPECT_EQ(ErrorOf("optimizer:\n  lambda_s: fast\n"),
-            "test.yaml:2: optimizer.lambda_s = fast. Violated constraint: a finite number");
+            "test.yaml:2: optimizer.lambda_s = fast. Violated constraint: a number");
   EXPECT_EQ(ErrorOf("labels:\n  count: 2.5\n"),
             "test.yaml:2: labels.count = 2.5. Violated constraint: an integer");
   EXPECT_EQ(ErrorOf("labels:\n  space: log\n"),
@@ -109,6 +109,8 @@ TEST_F(SchemaTest, WrongTypesAreRejected) {
             "test.yaml:1: optimizer is a section: expected a mapping of keys, got '3'");
   EXPECT_EQ(ErrorOf("optimizer:\n  refine: maybe\n"),
             "test.yaml:2: optimizer.refine = maybe. Violated constraint: true or false");
+  EXPECT_EQ(ErrorOf("optimizer:\n  lambda_s: .inf\n"),
+            "test.yaml:2: optimizer.lambda_s = .inf. Violated constraint: a finite number");
   // A failed value leaves the field untouched.
   EXPECT_EQ(o.count, 360);
 }

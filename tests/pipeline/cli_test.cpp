@@ -103,7 +103,7 @@ TEST(Cli, FountainAtHalfScaleReportsElevenViews) {
   const Result r = RunCli(std::string("run ") + GCPSTEREO_SOURCE_DIR +
                           "/configs/fountain_p11.yaml -o " + (dir / "out").string() +
                           " --set dataset.path=" + fountain + " --set dataset.neighbors=[]" +
-                          " --set runtime.log_level=warn");
+                          " --set runtime.log_level=warn --set runtime.stop_after=load");
   ASSERT_EQ(r.status, 0) << r.output;
   std::ifstream in(dir / "out" / "report.json");
   const std::string report((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -178,7 +178,8 @@ class ValueApplier {
   double Number(const YAML::Node& n) const {
     if (!n.IsScalar()) Fail("a number");
     double v;
-    if (!YAML::convert<double>::decode(n, v) || !std::isfinite(v)) Fail("a finite number");
+    if (!YAML::convert<double>::decode(n, v) || std::isnan(v)) Fail("a number");
+    if (std::isinf(v) && !entry_.range.Contains(v)) Fail("a finite number");
     return v;
   }
   int Integer(const YAML::Node& n) const {

@@ -7,6 +7,15 @@
 #include <vector>
 
 #include "gcpstereo/config/schema.h"
+#include "gcpstereo/cost/birchfield_tomasi.h"
+#include "gcpstereo/cost/label_range.h"
+#include "gcpstereo/cost/plane_sweep.h"
+#include "gcpstereo/gcp/gcp_sources.h"
+#include "gcpstereo/gcp/stereo_gcps.h"
+#include "gcpstereo/optimize/alpha_expansion.h"
+#include "gcpstereo/optimize/energy.h"
+#include "gcpstereo/optimize/refinement.h"
+#include "gcpstereo/propagation/propagation.h"
 
 namespace gcpstereo::pipeline {
 
@@ -40,6 +49,27 @@ struct GcpOptions {
   std::string lidar_path;            // gcp.lidar.path
   DepthMapGcpOptions depth_map;      // gcp.depth_map.*
   int downsample = 16;               // s: one GCP per s×s block (paper: 16 → ≈0.4 %)
+  gcp::LidarGcpOptions lidar;        // gcp.lidar.*
+  gcp::StereoGcpOptions stereo;      // gcp.stereo.*
+};
+
+// Keys of the `cost:` section.
+struct CostOptions {
+  // auto = Birchfield–Tomasi for a rectified pair (one neighbour), plane sweep otherwise.
+  std::string method = "auto";  // auto | plane_sweep | birchfield_tomasi
+  cost::PlaneSweepOptions plane_sweep;
+  cost::BirchfieldTomasiOptions birchfield_tomasi;
+};
+
+// Keys of the `optimizer:` section handed to the optimize module.
+struct OptimizerOptions {
+  optimize::EnergyOptions energy;
+  optimize::ExpansionOptions expansion;
+  optimize::RefinementOptions refinement;
+  std::string candidate_labels = "local";  // all | local
+  std::string initialization = "wta";      // wta | prior
+  std::string refinement_method = "ceres"; // none | parabola | ceres
+  std::string blend = "mean";              // mean | feather
 };
 
 // Keys of the `optimizer:` section that the pipeline itself reads.
@@ -51,6 +81,15 @@ struct TilingOptions {
 struct RuntimeOptions {
   int threads = 0;              // worker threads; 0 = all cores
   std::string log_level = "info";
+  std::string stop_after = "all";  // load | gcps | propagation | all
+};
+
+// Keys of the `eval:` section.
+struct EvalOptions {
+  // Split the LiDAR scan by an 8×8-pixel checkerboard of blocks: one half are GCPs, the other
+  // half scores the result (KITTI-style bad-3), as no dense ground truth exists.
+  bool lidar_holdout = false;
+  int holdout_block_px = 8;
 };
 
 struct OutputOptions {
@@ -64,6 +103,11 @@ struct PipelineConfig {
   LabelOptions labels;
   GcpOptions gcp;
   TilingOptions tiling;
+  CostOptions cost;
+  cost::LabelRangeOptions label_range;  // labels.auto.*
+  propagation::PropagationOptions propagation;
+  OptimizerOptions optimizer;
+  EvalOptions eval;
   RuntimeOptions runtime;
   OutputOptions output;
 

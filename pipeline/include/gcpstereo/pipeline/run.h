@@ -12,7 +12,8 @@ struct RunSummary {
   std::string output_dir;
   double total_seconds = 0.0;
   std::size_t peak_memory_bytes = 0;
-  std::string report_json;  // the report.json text
+  std::string report_json;       // the report.json text
+  std::string terminal_summary;  // GCP counts and metrics tables for the terminal
 };
 
 // Runs the pipeline described by `config` and writes the outputs into `output_dir`

@@ -18,8 +18,13 @@ struct Range {
   bool max_inclusive = true;
 
   static Range Any() { return {}; }
-  static Range AtLeast(double v) { return {v, std::numeric_limits<double>::infinity(), true, true}; }
+  // Finite values >= v (or > v); infinity is excluded.
+  static Range AtLeast(double v) { return {v, std::numeric_limits<double>::infinity(), true, false}; }
   static Range GreaterThan(double v) {
+    return {v, std::numeric_limits<double>::infinity(), false, false};
+  }
+  // Values > v, infinity included (e.g. a maximum depth that may be unbounded: .inf in YAML).
+  static Range GreaterThanOrInfinite(double v) {
     return {v, std::numeric_limits<double>::infinity(), false, true};
   }
   static Range Between(double lo, double hi) { return {lo, hi, true, true}; }

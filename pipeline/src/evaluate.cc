@@ -1,0 +1,159 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/pipeline/evaluate.h"
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "gcpstereo/core/error.h"
+#include "gcpstereo/eval/json.h"
+#include "gcpstereo/io/atomic_file.h"
+#include "gcpstereo/io/camera_io.h"
+#include "gcpstereo/io/dataset_io.h"
+#include "gcpstereo/io/image_io.h"
+#include "gcpstereo/io/mesh_io.h"
+#include "gcpstereo/io/pfm.h"
+#include "gcpstereo/io/point_cloud_io.h"
+#include "gcpstereo/pipeline/pipeline_config.h"
+#include "stages.h"
+
+namespace fs = std::filesystem;
+
+namespace gcpstereo::pipeline {
+namespace {
+
+using nlohmann::json;
+
+// A single-channel float map from PFM, or an integer image divided by `scale` (0 = unknown).
+// Ground truth (`zero_is_unknown`): 0, negative and NaN mean unknown; an estimate keeps 0 (a
+// disparity of 0 is a valid estimate) and only non-finite values mean "no estimate".
+cv::Mat ReadMap(const std::string& path, double scale, bool zero_is_unknown) {
+  const std::string ext = fs::path(path).extension().string();
+  cv::Mat map;
+  if (ext == ".pfm" || ext == ".PFM") {
+    map = io::ReadPfm(path);
+    if (map.channels() != 1) throw IoError(path, "expected a single-channel PFM");
+  } else {
+    const cv::Mat raw = io::ReadImage(path, cv::IMREAD_UNCHANGED);
+    if (raw.channels() != 1) throw IoError(path, "expected a single-channel image");
+    raw.convertTo(map, CV_32F, 1.0 / scale);
+    map.setTo(kInvalidDepth, raw == 0);
+  }
+  if (zero_is_unknown) {
+    map.setTo(kInvalidDepth, ~(map > 0));
+  } else {
+    map.setTo(kInvalidDepth, map != map);  // NaN
+  }
+  return map;
+}
+
+cv::Mat ReadMask(const std::string& path, cv::Size size) {
+  if (path.empty()) return {};
+  cv::Mat mask = io::ReadImage(path, cv::IMREAD_GRAYSCALE);
+  if (mask.size() != size) throw IoError(path, "mask size differs from the ground truth's");
+  return mask;
+}
+
+void RequireSameSize(const cv::Mat& a, const std::string& a_name, const cv::Mat& b,
+                     const std::string& b_name) {
+  if (a.size() != b.size()) {
+    throw Error(a_name + " is " + std::to_string(a.cols) + "x" + std::to_string(a.rows) + " but " +
+                b_name + " is " + std::to_string(b.cols) + "x" + std::to_string(b.rows));
+  }
+}
+
+}  // namespace
+
+std::string RunEvaluation(const EvalRequest& r) {
+  const int estimates = !r.run_folder.empty() + !r.depth.empty() + !r.disparity.empty();
+  if (estimates != 1) {
+    throw ConfigError("eval: give exactly one of --run, --depth, --disparity");
+  }
+  Dataset dataset;  // only its ground truth is used
+  internal::EvaluationInputs inputs;
+  json report;
+
+  if (!r.run_folder.empty()) {
+    const std::string config_path = (fs::path(r.run_folder) / "effective_config.yaml").string();
+    if (!fs::exists(config_path)) {
+      throw IoError(r.run_folder, "not a finished gcpstereo run (no effective_config.yaml)");
+    }
+    LoadedConfig config;
+    config.Load(config_path, {});
+    const PipelineConfig& o = config.options();
+    io::DatasetRequest request{o.dataset.format, o.dataset.path, o.dataset.reference,
+                               o.dataset.neighbors, o.dataset.scale};
+    dataset = io::LoadDataset(request);
+    const cv::Mat depth = io::ReadPfm((fs::path(r.run_folder) / "depth.pfm").string());
+    inputs.depth_maps.emplace_back("result", depth);
+    const std::string disparity_path = (fs::path(r.run_folder) / "disparity.pfm").string();
+    if (fs::exists(disparity_path)) {
+      inputs.disparity_maps.emplace_back("result", io::ReadPfm(disparity_path));
+    }
+    report["run"] = r.run_folder;
+  } else if (!r.depth.empty()) {
+    const cv::Mat depth = ReadMap(r.depth, 1.0, false);
+    inputs.depth_maps.emplace_back("result", depth);
+    GroundTruth& gt = dataset.ground_truth;
+    if (!r.gt_depth.empty()) {
+      gt.depth = ReadMap(r.gt_depth, 1.0, true);
+      RequireSameSize(depth, r.depth, gt.depth, r.gt_depth);
+    } else if (!r.gt_mesh.empty() || !r.gt_points.empty()) {
+      if (r.camera.empty()) throw ConfigError("eval: --gt-mesh/--gt-points need --camera");
+      Camera camera = io::ReadStrechaCamera(r.camera);
+      if (camera.width != depth.cols || camera.height != depth.rows) {
+        camera = camera.Rescaled(static_cast<double>(depth.cols) / camera.width);
+      }
+      RequireSameSize(depth, r.depth, cv::Mat(camera.height, camera.width, CV_8U), r.camera);
+      gt.depth = !r.gt_mesh.empty()
+                     ? eval::RenderMeshDepth(io::ReadMeshPly(r.gt_mesh), camera).depth
+                     : eval::RenderPointDepth(io::ReadPointCloud(r.gt_points), camera).depth;
+    } else {
+      throw ConfigError("eval: --depth needs --gt-depth, --gt-mesh or --gt-points");
+    }
+    if (!r.gt_sigma.empty()) {
+      gt.sigma = ReadMap(r.gt_sigma, 1.0, true);
+      RequireSameSize(depth, r.depth, gt.sigma, r.gt_sigma);
+    } else if (r.sigma > 0.0) {
+      gt.sigma = cv::Mat(depth.size(), CV_32F, cv::Scalar(r.sigma));
+    } else {
+      throw ConfigError("eval: give the laser's sigma (--gt-sigma map or --sigma value)");
+    }
+  } else {
+    const cv::Mat disparity = ReadMap(r.disparity, 1.0, false);
+    inputs.disparity_maps.emplace_back("result", disparity);
+    if (r.gt_disparity.empty()) throw ConfigError("eval: --disparity needs --gt-disparity");
+    GroundTruth& gt = dataset.ground_truth;
+    gt.disparity = ReadMap(r.gt_disparity, r.gt_scale, true);
+    RequireSameSize(disparity, r.disparity, gt.disparity, r.gt_disparity);
+    if (!r.gt_disparity_right.empty()) {
+      gt.disparity_right = ReadMap(r.gt_disparity_right, r.gt_scale, true);
+    }
+    gt.mask_nonocc = ReadMask(r.mask_nonocc, gt.disparity.size());
+    gt.mask_all = ReadMask(r.mask_all, gt.disparity.size());
+    gt.mask_disc = ReadMask(r.mask_disc, gt.disparity.size());
+    inputs.border_px = r.border_px;
+  }
+
+  std::vector<std::pair<std::string, cv::Mat>> figures;
+  report["metrics"] = internal::Evaluate(dataset, inputs, &figures);
+  if (report["metrics"].empty()) {
+    throw Error("eval: no ground truth to compare with (the data set has none)");
+  }
+  if (!r.figures.empty()) {
+    fs::create_directories(r.figures);
+    for (const auto& [name, image] : figures) {
+      io::WritePng((fs::path(r.figures) / name).string(), image);
+    }
+  }
+  const std::string text = report.dump(2) + "\n";
+  if (!r.report.empty()) io::WriteBytesAtomically(r.report, text.data(), text.size());
+  std::cout << internal::TerminalSummary(report);
+  return text;
+}
+
+}  // namespace gcpstereo::pipeline

@@ -1,0 +1,218 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// Stage 2: ground control points from the configured sources (LiDAR, a depth image, image matches).
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include <opencv2/imgproc.hpp>
+
+#include "gcpstereo/core/error.h"
+#include "gcpstereo/core/logging.h"
+#include "gcpstereo/gcp/gcp_sources.h"
+#include "gcpstereo/gcp/stereo_gcps.h"
+#include "gcpstereo/io/image_io.h"
+#include "gcpstereo/io/pfm.h"
+#include "gcpstereo/io/point_cloud_io.h"
+#include "stages.h"
+
+namespace gcpstereo::pipeline::internal {
+namespace {
+
+using nlohmann::json;
+
+json SummaryJson(const gcp::GcpSourceSummary& s) {
+  return {{"source", s.source},
+          {"input", s.num_input},
+          {"invalid", s.num_invalid},
+          {"behind_camera", s.num_behind_camera},
+          {"outside_image", s.num_outside_image},
+          {"same_pixel", s.num_same_pixel},
+          {"inconsistent", s.num_inconsistent},
+          {"gcps", s.num_gcps},
+          {"density_percent", s.density_percent}};
+}
+
+// Reads gcp.depth_map.path as a depth map of the reference view (CV_32F, +inf = none).
+cv::Mat ReadDepthMapSource(const DepthMapGcpOptions& options, const Dataset& dataset,
+                           double dataset_scale) {
+  const std::string ext = std::filesystem::path(options.path).extension().string();
+  cv::Mat values;
+  if (ext == ".pfm" || ext == ".PFM") {
+    values = io::ReadPfm(options.path);
+    if (values.channels() != 1) throw IoError(options.path, "expected a 1-channel PFM");
+  } else {
+    const cv::Mat raw = io::ReadImage(options.path, cv::IMREAD_UNCHANGED);
+    if (raw.channels() != 1 || (raw.depth() != CV_8U && raw.depth() != CV_16U)) {
+      throw IoError(options.path, "expected an 8- or 16-bit single-channel image");
+    }
+    raw.convertTo(values, CV_32F, 1.0 / options.scale);
+    values.setTo(std::numeric_limits<float>::quiet_NaN(), raw == 0);
+  }
+  // The image is of the reference view at its original size: resize to the processed size.
+  const cv::Size size = dataset.reference.image.size();
+  if (values.size() != size) {
+    const double sx = static_cast<double>(size.width) / values.cols;
+    const double sy = static_cast<double>(size.height) / values.rows;
+    if (std::abs(sx - dataset_scale) > 0.01 || std::abs(sy - dataset_scale) > 0.01) {
+      throw IoError(options.path, "size " + std::to_string(values.cols) + "x" +
+                                      std::to_string(values.rows) +
+                                      " does not match the reference view");
+    }
+    cv::resize(values, values, size, 0, 0, cv::INTER_NEAREST);
+    if (options.kind == "disparity") values *= dataset_scale;  // disparities scale with the image
+  }
+  if (options.kind == "depth") {
+    values.setTo(kInvalidDepth, ~(values > 0));  // also catches NaN
+    return values;
+  }
+  if (!dataset.rectified) {
+    throw ConfigError("gcp.depth_map.kind = disparity needs rectified data (middlebury, kitti_raw)");
+  }
+  return gcp::DisparityToDepth(values, dataset.disparity_numerator);
+}
+
+}  // namespace
+
+RectifiedPair FindRectifiedPair(const Dataset& dataset, const std::string& purpose) {
+  if (!dataset.rectified || dataset.neighbors.empty()) {
+    throw ConfigError(purpose + " needs a rectified pair (middlebury or kitti_raw with a neighbour)");
+  }
+  RectifiedPair pair;
+  pair.neighbor = &dataset.neighbors.front();
+  const double baseline =
+      pair.neighbor->camera.center_world.x() - dataset.reference.camera.center_world.x();
+  pair.numerator = dataset.reference.camera.K(0, 0) * baseline;
+  if (!(pair.numerator > 0.0)) {
+    throw ConfigError(purpose + " needs the first of dataset.neighbors to be right of the "
+                      "reference view ('" + pair.neighbor->name + "' is not)");
+  }
+  return pair;
+}
+
+GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
+                           const LabelSpace& provisional_labels) {
+  GcpStageResult result;
+  const Camera& reference = dataset.reference.camera;
+  const int width = dataset.reference.image.cols, height = dataset.reference.image.rows;
+  std::vector<GcpSet> sets;
+  json sources = json::array();
+
+  for (const std::string& source : config.gcp.sources) {
+    gcp::GcpSourceSummary summary;
+    if (source == "lidar") {
+      PointCloud cloud = io::ReadPointCloud(config.gcp.lidar_path);
+      if (config.eval.lidar_holdout) {
+        // Checkerboard split of the projected scan (eval module's documented pattern): GCP blocks
+        // feed the GCPs; the other blocks are kept to score the result.
+        const auto projected = eval::ProjectPointCloud(cloud, reference, dataset.world_from_lidar,
+                                                       /*keep_nearest_per_pixel=*/true);
+        std::vector<Eigen::Vector2d> pixels;
+        pixels.reserve(projected.size());
+        for (const auto& p : projected) pixels.push_back(p.pixel);
+        const eval::LidarSplit split =
+            eval::CheckerboardSplit(pixels, config.eval.holdout_block_px);
+        PointCloud gcp_part;
+        for (int i : split.gcp_indices) {
+          const int k = projected[i].index;
+          gcp_part.points.push_back(cloud.points[k]);
+          if (!cloud.sigma.empty()) gcp_part.sigma.push_back(cloud.sigma[k]);
+        }
+        result.holdout_in_disparity = dataset.rectified;
+        for (int i : split.score_indices) {
+          const auto& p = projected[i];
+          if (p.pixel.x() < -0.5 || p.pixel.y() < -0.5 || p.pixel.x() >= width - 0.5 ||
+              p.pixel.y() >= height - 0.5) {
+            continue;
+          }
+          const double value =
+              dataset.rectified ? dataset.disparity_numerator / p.depth : p.depth;
+          result.lidar_holdout.push_back({p.pixel, value});
+        }
+        spdlog::info("LiDAR hold-out: {} points as GCP candidates, {} points for scoring",
+                     gcp_part.size(), result.lidar_holdout.size());
+        cloud = std::move(gcp_part);
+      }
+      sets.push_back(gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference,
+                                             config.gcp.lidar, &summary));
+    } else if (source == "depth_map") {
+      const cv::Mat depth = ReadDepthMapSource(config.gcp.depth_map, dataset, config.dataset.scale);
+      sets.push_back(gcp::GcpsFromDepthMap(depth, config.gcp.depth_map.sigma,
+                                           GcpSource::kDepthMap, &summary));
+    } else if (source == "stereo") {
+      const RectifiedPair pair = FindRectifiedPair(dataset, "gcp.sources: stereo");
+      // Pair disparities of the label range: numerator / depth at both ends.
+      double d0 = pair.numerator / provisional_labels.DepthOfLabel(0);
+      double d1 = pair.numerator / provisional_labels.DepthOfLabel(provisional_labels.count() - 1);
+      if (!std::isfinite(d0)) d0 = 0.0;
+      if (!std::isfinite(d1)) d1 = 0.0;
+      const int min_disparity = static_cast<int>(std::floor(std::min(d0, d1)));
+      const int max_disparity = static_cast<int>(std::ceil(std::max(d0, d1)));
+      const gcp::StereoGcpResult stereo =
+          gcp::ExtractStereoGcps(dataset.reference.image, pair.neighbor->image, min_disparity,
+                                 max_disparity, config.gcp.stereo);
+      sets.push_back(gcp::StereoGcpsToGcpSet(stereo.disparity, pair.numerator,
+                                             config.gcp.stereo.sigma_px, &summary));
+      summary.source = "stereo";
+    }
+    summary.source = source;
+    spdlog::info("GCP source {}: {} GCPs ({:.2f} % of the pixels)", source, summary.num_gcps,
+                 summary.density_percent);
+    sources.push_back(SummaryJson(summary));
+  }
+
+  const GcpSet merged = gcp::MergeGcpSets(sets);
+  result.gcps = gcp::Downsample(merged, config.gcp.downsample, width, height);
+  result.report = {{"sources", sources},
+                   {"downsample", config.gcp.downsample},
+                   {"before_downsample", merged.size()},
+                   {"count", result.gcps.size()},
+                   {"density_percent", gcp::DensityPercent(result.gcps, width, height)}};
+  return result;
+}
+
+cv::Mat SparseGcpLabels(const GcpSet& gcps, const LabelSpace& labels, cv::Size size) {
+  cv::Mat sparse(size, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  for (const Gcp& g : gcps.points) {
+    if (g.row < 0 || g.col < 0 || g.row >= size.height || g.col >= size.width) continue;
+    const double label = labels.LabelOfDepth(g.depth);
+    if (std::isfinite(label)) sparse.at<float>(g.row, g.col) = static_cast<float>(label);
+  }
+  return sparse;
+}
+
+cv::Mat LabelMapToDepth(const cv::Mat& labels, const LabelSpace& space) {
+  cv::Mat float_labels;
+  labels.convertTo(float_labels, CV_32F);
+  cv::Mat depth(labels.size(), CV_32F);
+  for (int r = 0; r < labels.rows; ++r) {
+    const float* in = float_labels.ptr<float>(r);
+    float* out = depth.ptr<float>(r);
+    for (int c = 0; c < labels.cols; ++c) {
+      const double d = std::isfinite(in[c]) && in[c] >= 0 ? space.DepthOfLabel(in[c]) : kInvalidDepth;
+      out[c] = std::isfinite(d) && d > 0 ? static_cast<float>(d) : kInvalidDepth;
+    }
+  }
+  return depth;
+}
+
+cv::Mat LabelMapToDisparity(const cv::Mat& labels, const LabelSpace& space, double numerator) {
+  cv::Mat float_labels;
+  labels.convertTo(float_labels, CV_32F);
+  cv::Mat disparity(labels.size(), CV_32F);
+  for (int r = 0; r < labels.rows; ++r) {
+    const float* in = float_labels.ptr<float>(r);
+    float* out = disparity.ptr<float>(r);
+    for (int c = 0; c < labels.cols; ++c) {
+      if (!std::isfinite(in[c]) || in[c] < 0) {
+        out[c] = kInvalidDepth;
+      } else if (space.kind() == LabelSpaceKind::kDisparity) {
+        out[c] = static_cast<float>(space.ValueOfLabel(in[c]));
+      } else {
+        out[c] = static_cast<float>(numerator / space.DepthOfLabel(in[c]));
+      }
+    }
+  }
+  return disparity;
+}
+
+}  // namespace gcpstereo::pipeline::internal

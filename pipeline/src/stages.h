@@ -1,0 +1,71 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// The stages of `gcpstereo run`, each a function from in-memory inputs to results plus a JSON
+// summary for report.json. Only run.cc touches the output folder.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core/mat.hpp>
+
+#include "gcpstereo/core/labels.h"
+#include "gcpstereo/core/types.h"
+#include "gcpstereo/eval/lidar.h"
+#include "gcpstereo/pipeline/pipeline_config.h"
+
+namespace gcpstereo::pipeline::internal {
+
+// The neighbour used with the reference as a rectified pair (Birchfield–Tomasi cost, stereo GCPs):
+// the first neighbour. `numerator` = f · (C_neighbour.x − C_reference.x): its pair disparity is
+// numerator / depth (a reference pixel x matches x − d in the neighbour). Throws ConfigError when
+// the data set is not rectified or has no neighbour, or that neighbour is left of the reference.
+struct RectifiedPair {
+  const View* neighbor = nullptr;
+  double numerator = 0.0;
+};
+RectifiedPair FindRectifiedPair(const Dataset& dataset, const std::string& purpose);
+
+struct GcpStageResult {
+  GcpSet gcps;                                        // merged and downsampled
+  nlohmann::json report;                              // per-source counts, density
+  std::vector<eval::ReferencePoint> lidar_holdout;    // disparity/depth reference values of the
+                                                      // held-out scan points (eval.lidar_holdout)
+  bool holdout_in_disparity = false;                  // values are disparities (rectified data)
+};
+// Builds the GCPs of every configured source. `provisional_labels` gives the disparity search
+// range of stereo GCPs.
+GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
+                           const LabelSpace& provisional_labels);
+
+// Continuous labels of the GCPs on the reference grid (NaN elsewhere), for propagation.
+cv::Mat SparseGcpLabels(const GcpSet& gcps, const LabelSpace& labels, cv::Size size);
+
+// Converts continuous labels (CV_32F or CV_32S) to depth (CV_32F, +inf where invalid).
+cv::Mat LabelMapToDepth(const cv::Mat& labels, const LabelSpace& space);
+// Disparity in the data set's ground-truth convention: the label value itself for disparity
+// labels, numerator / depth otherwise (+inf where unknown).
+cv::Mat LabelMapToDisparity(const cv::Mat& labels, const LabelSpace& space, double numerator);
+
+// Evaluation against whatever ground truth the data set carries. `maps` are named depth maps
+// ("final", "propagated", …); figures are added to `previews` (name → image).
+struct EvaluationInputs {
+  std::vector<std::pair<std::string, cv::Mat>> depth_maps;      // first = the result
+  std::vector<std::pair<std::string, cv::Mat>> disparity_maps;  // rectified data; same order
+  const std::vector<eval::ReferencePoint>* lidar_holdout = nullptr;
+  bool holdout_in_disparity = false;
+  int border_px = 0;  // ignored border of masks derived from a left-right check
+};
+nlohmann::json Evaluate(const Dataset& dataset, const EvaluationInputs& inputs,
+                        std::vector<std::pair<std::string, cv::Mat>>* previews);
+
+// The picture of the GCPs over the reference image (colour per source).
+cv::Mat RenderGcpOverlay(const cv::Mat& image_bgr, const GcpSet& gcps);
+
+// index.html of the output folder: the previews and the metrics table.
+std::string MakeIndexHtml(const nlohmann::json& report, const std::vector<std::string>& images);
+
+// A few lines for the terminal at the end of a run.
+std::string TerminalSummary(const nlohmann::json& report);
+
+}  // namespace gcpstereo::pipeline::internal
