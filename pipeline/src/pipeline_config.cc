@@ -133,6 +133,9 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("propagation.ordering", &propagation.ordering, {"nested_dissection", "solver"},
          {"fill-reducing ordering: geometric nested dissection of the grid or the solver's own"});
 
+  s->Add("optimizer.method", &optimizer.method, {"graph_cuts", "wta"},
+         {"graph_cuts = minimise E_data + E_smooth + E_gcp (the paper); wta = winner-take-all of "
+          "the matching costs alone (no smoothness, no GCP energy, no refinement)"});
   s->Add("optimizer.lambda_s", &optimizer.energy.lambda_s, Range::AtLeast(0.0),
          {"smoothness weight of eq. 3 (paper: 20)", "energy per label step", "λs"});
   s->Add("optimizer.truncation", &optimizer.energy.truncation, Range::GreaterThan(0.0),

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
@@ -17,6 +18,7 @@
 #include "gcpstereo/cost/birchfield_tomasi.h"
 #include "gcpstereo/cost/label_range.h"
 #include "gcpstereo/cost/plane_sweep.h"
+#include "gcpstereo/cost/winner_take_all.h"
 #include "gcpstereo/io/atomic_file.h"
 #include "gcpstereo/io/dataset_io.h"
 #include "gcpstereo/io/image_io.h"
@@ -264,7 +266,29 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     return problem;
   };
   optimize::TiledResult optimized;
-  {
+  if (options.optimizer.method == "wta") {
+    // Winner-take-all per tile: the same tiling and cost code, no energy minimisation.
+    optimized.labels = cv::Mat(size, CV_32F, cv::Scalar(0));
+    cv::Mat weight(size, CV_32F, cv::Scalar(0));
+    for (const cv::Rect& region : optimize::TileLayout(size, tiling)) {
+      optimize::OwnedMrfProblem problem = make_problem(region);
+      cv::Mat labels = cost::WinnerTakeAll(problem.data);
+      cv::Mat float_labels;
+      labels.convertTo(float_labels, CV_32F);
+      float_labels.setTo(std::numeric_limits<float>::quiet_NaN(), labels < 0);
+      // Overlaps: the mean, as the graph-cut merge does.
+      cv::Mat target = optimized.labels(region), w = weight(region);
+      for (int r = 0; r < region.height; ++r) {
+        for (int c = 0; c < region.width; ++c) {
+          const float v = float_labels.at<float>(r, c);
+          if (std::isnan(v)) continue;
+          target.at<float>(r, c) += v;
+          w.at<float>(r, c) += 1.0f;
+        }
+      }
+    }
+    optimized.labels /= weight;  // 0/0 = NaN where no tile had data: no estimate
+  } else {
     ProgressBar bar("graph cuts", 1000);
     optimize::RefinementOptions refinement = options.optimizer.refinement;
     refinement.method = optimize::ParseRefinementMethod(options.optimizer.refinement_method);
@@ -296,7 +320,8 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                        {"converged", tile.refinement.solver_converged},
                        {"seconds", tile.refinement.time_seconds}}}});
   }
-  optimize_clock.Done({{"cost_method", cost_method},
+  optimize_clock.Done({{"method", options.optimizer.method},
+                       {"cost_method", cost_method},
                        {"gcp_energy", use_gcp_energy},
                        {"tiles", tiles},
                        {"energy_sum", optimized.energy_sum}});

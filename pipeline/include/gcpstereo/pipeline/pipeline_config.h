@@ -63,6 +63,9 @@ struct CostOptions {
 
 // Keys of the `optimizer:` section handed to the optimize module.
 struct OptimizerOptions {
+  // graph_cuts = the global energy (the paper); wta = winner-take-all of the costs alone (the
+  // simplest result, for comparison and for measuring the cost stage).
+  std::string method = "graph_cuts";
   optimize::EnergyOptions energy;
   optimize::ExpansionOptions expansion;
   optimize::RefinementOptions refinement;
