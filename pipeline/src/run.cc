@@ -19,6 +19,7 @@
 #include "gcpstereo/cost/label_range.h"
 #include "gcpstereo/cost/plane_sweep.h"
 #include "gcpstereo/cost/winner_take_all.h"
+#include "gcpstereo/gcp/stereo_gcps.h"
 #include "gcpstereo/io/atomic_file.h"
 #include "gcpstereo/io/dataset_io.h"
 #include "gcpstereo/io/image_io.h"
@@ -174,10 +175,6 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   const GcpSet& gcps = gcp_stage.gcps;
   report["gcps"] = gcp_stage.report;
   gcp_clock.Done({{"count", gcps.size()}});
-  if (stop_after == "gcps") {
-    io::WriteGcpsPly(out.Path("gcps.ply"), gcps, reference.camera);
-    return finish({});
-  }
 
   cost::LabelRangeSummary range_summary;
   const LabelSpace labels = cost::MakeLabelSpace(
@@ -191,8 +188,50 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                       {"range_source", range_summary.source},
                       {"depth_of_first_label", labels.DepthOfLabel(0)},
                       {"depth_of_last_label", labels.DepthOfLabel(labels.count() - 1)}};
+  // GCP quality against the ground truth (the paper's Table 1: outliers = |error| > 1 px).
+  if (!gcps.empty() && dataset.ground_truth.HasDisparity()) {
+    cv::Mat sparse(size, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+    for (const Gcp& g : gcps.points) {
+      sparse.at<float>(g.row, g.col) = static_cast<float>(dataset.disparity_numerator / g.depth);
+    }
+    const gcp::GcpOutlierStats stats =
+        gcp::ComputeOutlierStats(sparse, dataset.ground_truth.disparity, 1.0);
+    report["gcps"]["outliers"] = {{"definition", "|disparity - gt| > 1 px"},
+                                  {"evaluated", stats.num_evaluated},
+                                  {"outliers", stats.num_outliers},
+                                  {"percent", stats.outlier_percent}};
+  } else if (!gcps.empty() && dataset.ground_truth.HasDepth()) {
+    cv::Mat sparse(size, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+    cv::Mat gt_labels(size, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+    int within_3_sigma = 0, with_sigma = 0;
+    for (const Gcp& g : gcps.points) {
+      sparse.at<float>(g.row, g.col) = static_cast<float>(labels.LabelOfDepth(g.depth));
+      const float gt = dataset.ground_truth.depth.at<float>(g.row, g.col);
+      if (!IsValidDepth(gt)) continue;
+      gt_labels.at<float>(g.row, g.col) = static_cast<float>(labels.LabelOfDepth(gt));
+      if (!dataset.ground_truth.sigma.empty()) {
+        const float sigma = dataset.ground_truth.sigma.at<float>(g.row, g.col);
+        if (std::isfinite(sigma) && sigma > 0) {
+          ++with_sigma;
+          within_3_sigma += std::abs(g.depth - gt) <= 3.0 * sigma;
+        }
+      }
+    }
+    const gcp::GcpOutlierStats stats = gcp::ComputeOutlierStats(sparse, gt_labels, 1.0);
+    report["gcps"]["outliers"] = {{"definition", "|label - gt label| > 1 label step"},
+                                  {"evaluated", stats.num_evaluated},
+                                  {"outliers", stats.num_outliers},
+                                  {"percent", stats.outlier_percent},
+                                  {"within_3_sigma_percent",
+                                   with_sigma ? 100.0 * within_3_sigma / with_sigma : 0.0}};
+  }
   spdlog::info("labels: {} {} from {} to {} (range from {})", labels.count(),
                LabelSpaceKindName(labels.kind()), labels.min(), labels.max(), range_summary.source);
+
+  if (stop_after == "gcps") {
+    io::WriteGcpsPly(out.Path("gcps.ply"), gcps, reference.camera);
+    return finish({});
+  }
 
   // 3. Adaptive propagation of the GCPs (eq. 5): the prior D̂ of the GCP energy, in labels.
   const bool use_gcp_energy = options.optimizer.energy.use_gcp_energy && !gcps.empty();
