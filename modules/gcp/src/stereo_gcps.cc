@@ -2,13 +2,14 @@
 //
 // Stereo GCPs of Wang & Yang, CVPR 2011, §4.1 (see stereo_gcps.h for the procedure and the
 // deliberate deviations). The three local matchers are private to this file:
-//  * Birchfield–Tomasi [3]: a small private implementation (no aggregation, integer disparities)
-//    rather than cost::ComputeBirchfieldTomasiCost, whose 16-bit volume was not available when
-//    this was written; the two should be deduplicated once the cost module is in.
+//  * Birchfield–Tomasi [3]: the cost module's volume (no aggregation, integer disparities).
 //  * NCC over an n×n RGB patch with box filters in double precision (sums of squares of 75 values
 //    up to 255² lose digits in float).
 //  * Yoon–Kweon adaptive support weights, exact formula, window sampled every aw_stride_px.
 #include "gcpstereo/gcp/stereo_gcps.h"
+
+#include "gcpstereo/cost/birchfield_tomasi.h"
+#include "gcpstereo/cost/winner_take_all.h"
 
 #include <algorithm>
 #include <array>
@@ -38,47 +39,19 @@ struct WtaMaps {
   cv::Mat bt, ncc, aw;  // CV_32S, −1 = invalid
 };
 
-// WTA of BT (sum over channels), reference = `ref`, target pixel x − d.
+// WTA of BT (sum over channels, untruncated), reference = `ref`, target pixel x − d: the cost
+// module's Birchfield–Tomasi volume over the whole image, ties to the smallest disparity.
 cv::Mat WtaBirchfieldTomasi(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax) {
-  const int width = ref.cols;
-  cv::Mat wta(ref.size(), CV_32S, cv::Scalar(-1));
-  std::vector<std::array<float, 3>> ref_min(width), ref_max(width), tgt_min(width), tgt_max(width);
-  auto half_range = [width](const cv::Vec3b* row, std::vector<std::array<float, 3>>* lo,
-                            std::vector<std::array<float, 3>>* hi) {
-    for (int x = 0; x < width; ++x) {
-      for (int c = 0; c < 3; ++c) {
-        const float v = row[x][c];
-        const float minus = 0.5f * (v + row[std::max(0, x - 1)][c]);
-        const float plus = 0.5f * (v + row[std::min(width - 1, x + 1)][c]);
-        (*lo)[x][c] = std::min({v, minus, plus});
-        (*hi)[x][c] = std::max({v, minus, plus});
-      }
-    }
-  };
-  for (int y = 0; y < ref.rows; ++y) {
-    const cv::Vec3b* r = ref.ptr<cv::Vec3b>(y);
-    const cv::Vec3b* t = target.ptr<cv::Vec3b>(y);
-    half_range(r, &ref_min, &ref_max);
-    half_range(t, &tgt_min, &tgt_max);
-    int* out = wta.ptr<int>(y);
-    for (int x = 0; x < width; ++x) {
-      float best = std::numeric_limits<float>::infinity();
-      for (int d = dmin; d <= dmax; ++d) {
-        const int xt = x - d;
-        if (xt < 0 || xt >= width) continue;
-        float cost = 0.0f;
-        for (int c = 0; c < 3; ++c) {
-          const float a = r[x][c];
-          const float b = t[xt][c];
-          const float d1 = std::max({0.0f, a - tgt_max[xt][c], tgt_min[xt][c] - a});
-          const float d2 = std::max({0.0f, b - ref_max[x][c], ref_min[x][c] - b});
-          cost += std::min(d1, d2);
-        }
-        if (cost < best) {
-          best = cost;
-          out[x] = d;
-        }
-      }
+  std::vector<double> disparities;
+  for (int d = dmin; d <= dmax; ++d) disparities.push_back(d);
+  const CostVolume volume = cost::ComputeBirchfieldTomasiCost(
+      ref, target, disparities, cv::Rect(0, 0, ref.cols, ref.rows), cost::BirchfieldTomasiOptions{});
+  cv::Mat wta = cost::WinnerTakeAll(volume);
+  // Labels index `disparities`: shift to disparities, keeping −1 (no valid disparity).
+  for (int y = 0; y < wta.rows; ++y) {
+    int* row = wta.ptr<int>(y);
+    for (int x = 0; x < wta.cols; ++x) {
+      if (row[x] >= 0) row[x] += dmin;
     }
   }
   return wta;

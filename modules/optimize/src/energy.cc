@@ -1,6 +1,8 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/optimize/energy.h"
 
+#include "gcpstereo/cost/winner_take_all.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -119,17 +121,8 @@ double ComputeEnergy(const MrfProblem& problem, const cv::Mat& labels, const Ene
 }
 
 cv::Mat WinnerTakeAll(const CostVolume& data) {
-  cv::Mat labels(data.height(), data.width(), CV_32S);
-  const int num_labels = data.num_labels();
-  for (int row = 0; row < data.height(); ++row) {
-    int* out = labels.ptr<int>(row);
-    for (int col = 0; col < data.width(); ++col) {
-      // kNoData (65535) is the largest stored value and decodes to max_cost, the largest cost,
-      // so comparing stored values is comparing costs.
-      const std::uint16_t* c = data.PixelData(row, col);
-      out[col] = static_cast<int>(std::min_element(c, c + num_labels) - c);
-    }
-  }
+  cv::Mat labels = cost::WinnerTakeAll(data);
+  labels.setTo(0, labels < 0);
   return labels;
 }
 

@@ -106,7 +106,9 @@ double GcpPenalty(double label, double prior_label, const EnergyOptions& options
 double ComputeEnergy(const MrfProblem& problem, const cv::Mat& labels, const EnergyOptions& options,
                      EnergyBreakdown* breakdown = nullptr);
 
-// Winner-take-all labels (CV_32S): argmin_l Φ(p, l), ties to the lowest label.
+// Winner-take-all labels for initialising and voting (CV_32S): cost::WinnerTakeAll (argmin_l
+// Φ(p, l), ties to the lowest label), with label 0 where no label has data, so that every pixel
+// holds a valid label.
 cv::Mat WinnerTakeAll(const CostVolume& data);
 
 }  // namespace gcpstereo::optimize
