@@ -192,6 +192,23 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("optimizer.tile_overlap", &tiling.tile_overlap, Range::Between(0, 1024),
          {"overlap between neighbouring tiles (paper: 16)", "px"});
 
+  s->Add("mesh.max_depth_ratio", &mesh.meshing.max_depth_ratio, Range::Between(0.0, 10.0),
+         {"drop a triangle whose largest/smallest vertex depth exceeds 1 + this (a depth "
+          "discontinuity); 0 = off"});
+  s->Add("mesh.max_view_angle_deg", &mesh.meshing.max_view_angle_deg,
+         Range{0.0, 90.0, false, true},
+         {"drop a triangle seen more obliquely than this (normal vs viewing ray); 90 = off", "deg"});
+  s->Add("mesh.stride", &mesh.meshing.stride_px, Range::Between(1, 1024),
+         {"one vertex every n pixels", "px"});
+  s->Add("mesh.preview.mode", &mesh.preview.mode, {"color", "shaded", "color_shaded"},
+         {"mesh.png: vertex colours, headlight shading, or both"});
+  s->Add("mesh.preview.yaw_deg", &mesh.preview_yaw_deg, Range::Between(-180.0, 180.0),
+         {"mesh.png viewpoint: rotation about the vertical through the median vertex", "deg"});
+  s->Add("mesh.preview.pitch_deg", &mesh.preview_pitch_deg, Range::Between(-89.0, 89.0),
+         {"mesh.png viewpoint: elevation", "deg"});
+  s->Add("mesh.preview.supersampling", &mesh.preview.supersampling, Range::Between(1, 4),
+         {"mesh.png anti-aliasing samples per pixel side"});
+
   s->Add("eval.lidar_holdout", &eval.lidar_holdout,
          {"score against held-out LiDAR points: a checkerboard of blocks splits the projected "
           "scan into GCPs and scoring points"});
@@ -208,7 +225,9 @@ void PipelineConfig::Register(config::Schema* s) {
           "load checks the data set and range data, gcps also builds the GCPs"});
 
   s->Add("output.previews", &output.previews, {"write the PNG previews and index.html"});
-  s->Add("output.mesh", &output.mesh, {"write mesh.ply and mesh.obj"});
+  s->Add("output.mesh", &output.mesh, {"write mesh.ply and mesh.obj (world coordinates)"});
+  s->Add("output.points", &output.points,
+         {"also write points.ply: one coloured 3D point per valid pixel (world coordinates)"});
 }
 
 void PipelineConfig::Check() const {
@@ -222,6 +241,8 @@ void PipelineConfig::Check() const {
   optimizer.energy.Check();
   optimizer.expansion.Check();
   optimizer.refinement.Check();
+  mesh.meshing.Check();
+  mesh.preview.Check();
   if (dataset.path.empty()) {
     throw ConfigError("dataset.path is required (the data set's folder)");
   }

@@ -23,9 +23,12 @@
 #include "gcpstereo/io/atomic_file.h"
 #include "gcpstereo/io/dataset_io.h"
 #include "gcpstereo/io/image_io.h"
+#include "gcpstereo/io/mesh_io.h"
 #include "gcpstereo/io/pfm.h"
 #include "gcpstereo/io/point_cloud_io.h"
 #include "gcpstereo/io/preview.h"
+#include "gcpstereo/mesh/meshing.h"
+#include "gcpstereo/mesh/render.h"
 #include "gcpstereo/optimize/tiling.h"
 #include "gcpstereo/pipeline/output_folder.h"
 #include "gcpstereo/propagation/propagation.h"
@@ -397,11 +400,45 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     clock.Done();
   }
 
-  // 7. Outputs, staged and moved into place at the end.
-  StageClock write_clock(&stages, "write");
+  // 7. Outputs, staged and moved into place at the end: the mesh, then the maps and previews.
+  std::vector<std::pair<std::string, cv::Mat>> mesh_previews;
   io::WritePfm(out.Path("depth.pfm"), depth);
   if (dataset.rectified) io::WritePfm(out.Path("disparity.pfm"), disparity);
   io::WriteGcpsPly(out.Path("gcps.ply"), gcps, reference.camera);
+  if (options.output.mesh || options.output.points) {
+    StageClock clock(&stages, "mesh");
+    json mesh_report = json::object();
+    if (options.output.mesh) {
+      mesh::MeshingSummary meshing;
+      const TriangleMesh triangles = mesh::MeshFromDepthMap(
+          depth, reference.image, reference.camera, options.mesh.meshing, &meshing);
+      io::WriteMeshPly(out.Path("mesh.ply"), triangles);
+      io::WriteMeshObj(out.Path("mesh.obj"), triangles);
+      mesh_report = {{"vertices", meshing.vertices},
+                     {"faces", meshing.faces},
+                     {"dropped_invalid", meshing.dropped_invalid},
+                     {"dropped_depth_ratio", meshing.dropped_depth_ratio},
+                     {"dropped_view_angle", meshing.dropped_view_angle}};
+      if (options.output.previews && !triangles.faces.empty()) {
+        // Small images are rendered larger so that the picture stays legible.
+        const double enlarge = std::max(1.0, 960.0 / reference.camera.width);
+        const Camera view = mesh::OrbitCamera(reference.camera.Rescaled(enlarge),
+                                              options.mesh.preview_yaw_deg,
+                                              options.mesh.preview_pitch_deg,
+                                              mesh::MedianVertex(triangles));
+        mesh_previews.emplace_back(
+            "mesh.png", mesh::RenderMeshPreview(triangles, view, options.mesh.preview));
+      }
+    }
+    if (options.output.points) {
+      io::WriteMeshPly(out.Path("points.ply"),
+                       mesh::ColoredPointsFromDepthMap(depth, reference.image, reference.camera,
+                                                       options.mesh.meshing.stride_px));
+    }
+    clock.Done(mesh_report);
+  }
+
+  StageClock write_clock(&stages, "write");
   std::vector<std::string> images;
   if (options.output.previews) {
     double lo = labels.DepthOfLabel(0), hi = labels.DepthOfLabel(labels.count() - 1);
@@ -417,6 +454,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     if (dataset.ground_truth.HasDepth()) {
       add("ground_truth.png", DepthPreview(dataset.ground_truth.depth, lo, hi));
     }
+    for (const auto& [name, image] : mesh_previews) add(name, image);
     for (const auto& [name, image] : previews) add(name, image);
   }
   write_clock.Done();

@@ -12,6 +12,8 @@
 #include "gcpstereo/cost/plane_sweep.h"
 #include "gcpstereo/gcp/gcp_sources.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
+#include "gcpstereo/mesh/meshing.h"
+#include "gcpstereo/mesh/render.h"
 #include "gcpstereo/optimize/alpha_expansion.h"
 #include "gcpstereo/optimize/energy.h"
 #include "gcpstereo/optimize/refinement.h"
@@ -98,6 +100,15 @@ struct EvalOptions {
 struct OutputOptions {
   bool previews = true;  // write the *.png previews and index.html
   bool mesh = true;      // write mesh.ply and mesh.obj
+  bool points = false;   // also write points.ply (one coloured point per valid pixel)
+};
+
+// Keys of the `mesh:` section.
+struct MeshOptions {
+  mesh::MeshingOptions meshing;
+  mesh::MeshRenderOptions preview;
+  double preview_yaw_deg = 30.0;    // viewpoint of mesh.png, rotated about the median vertex
+  double preview_pitch_deg = 15.0;
 };
 
 // The whole configuration of `gcpstereo run`.
@@ -110,6 +121,7 @@ struct PipelineConfig {
   cost::LabelRangeOptions label_range;  // labels.auto.*
   propagation::PropagationOptions propagation;
   OptimizerOptions optimizer;
+  MeshOptions mesh;
   EvalOptions eval;
   RuntimeOptions runtime;
   OutputOptions output;
