@@ -1,0 +1,870 @@
+#!/usr/bin/env python3
+# Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+"""Benchmark suites for gcpstereo: runs the program on the benchmark data through its outside
+contract (gcpstereo run / eval / synth, report.json) and writes one Markdown file per suite plus
+one JSON file with every number to --out.
+
+Suites
+  costs     matching costs and GCPs alone (no energy minimisation):
+            - winner-take-all bad-1 (nonocc / all) on the Middlebury scenes with the two-view
+              Birchfield-Tomasi cost (configs/middlebury_stereo.yaml, the ground-truth pair) and with
+              the multi-view plane sweep over all other views, at most 6
+              (configs/middlebury_multiview.yaml, gcp.sources=[], cost.method=plane_sweep);
+              both on the same integer disparity labels 0..max;
+            - stereo GCPs (paper section 4.1) per scene: density and outlier rate (|d - gt| > 1 px;
+              report.json gcps.outliers, cross-checked by this script from gcps.ply + the ground
+              truth image), and the accuracy of the propagated map D^ (eq. 5) they give;
+            - D^ from ground-truth-sampled GCPs at s = 16 (the range-sensor setting in miniature);
+            - KITTI: WTA bad-3 on the held-out LiDAR points of each frame;
+            - synthetic 'small' scene: WTA within-3-sigma share.
+  table2    the paper's Table 2 on the Middlebury scenes (configs/middlebury_stereo.yaml):
+            D without the GCP energy, D^ (propagated stereo GCPs), D with the GCP energy;
+            bad-1 in nonocc / all / disc, and the run times.
+  endtoend  full runs per data set: fountain-P11 (configs/fountain_p11.yaml), the synthetic
+            fountain (configs/synthetic_fountain.yaml; generated with gcpstereo synth if missing),
+            the Middlebury scenes two-view, each KITTI frame (configs/kitti_lidar.yaml with
+            eval.lidar_holdout=true); per-stage times, total, peak memory, main metrics; and OpenCV
+            SGBM (build/tools/benchmarks/gcpstereo_sgbm_baseline) on the rectified pairs, scored
+            with gcpstereo eval (Middlebury) or on the same held-out LiDAR points (KITTI).
+
+Scenes run one after the other (the machine may be shared). A failing scene never stops a suite:
+its error is recorded in the table and the JSON. Run folders stay under OUT/runs/ for inspection;
+--reuse skips runs whose folder already holds a report from the same command.
+
+Example (from the repository root, data in ../shared/data):
+  tools/benchmark.py --suite costs --build build --out bench-out
+  tools/benchmark.py --suite table2 --scenes tsukuba,venus
+"""
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import shutil
+import struct
+import subprocess
+import sys
+import time
+import zlib
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+# ---------------------------------------------------------------------------------------------
+# Data sets (datasets.md / the data README): names, views, ground truth files and label ranges.
+# ---------------------------------------------------------------------------------------------
+
+# Middlebury scenes: folder, the ground-truth pair (reference = left, neighbour = right), the other
+# views for the multi-view sweep, the GT file and divisor, the right view's GT (for derived masks),
+# and the disparity label range 0..max_disparity (integer labels, GT convention).
+MIDDLEBURY = []
+
+
+def _add_middlebury(name, reference, right, views, gt, gt_right, gt_scale, max_disparity,
+                    sgbm_disparities):
+    MIDDLEBURY.append({
+        "name": name,
+        "folder": name,
+        "reference": reference,
+        "right": right,
+        "multiview_neighbors": [v for v in views if v != reference][:6],
+        "gt": gt,
+        "gt_right": gt_right,
+        "gt_scale": gt_scale,
+        "max_disparity": max_disparity,
+        "sgbm_num_disparities": sgbm_disparities,
+    })
+
+
+_add_middlebury("tsukuba", "scene1.row3.col3", "scene1.row3.col4",
+                ["scene1.row3.col%d" % i for i in range(1, 6)],
+                "truedisp.row3.col3.pgm", None, 16, 15, 16)
+_add_middlebury("venus", "im2", "im6", ["im%d" % i for i in range(0, 9) if i not in (7, 8)],
+                "disp2.pgm", "disp6.pgm", 8, 19, 32)
+for _scene in ["Aloe", "Baby1", "Bowling1", "Flowerpots", "Midd1", "Rocks1"]:
+    _add_middlebury(_scene, "view1", "view5", ["view%d" % i for i in range(0, 7)],
+                    "disp1.png", "disp5.png", 3, 80, 96)
+# venus has im0..im8; the sweep uses the 6 nearest to im2: im0, im1, im3, im4, im5, im6.
+
+KITTI_DATE = "2011_09_26"
+KITTI_DRIVE = "2011_09_26_drive_0009_sync"
+KITTI_FRAMES = ["0000000000", "0000000010", "0000000020", "0000000030", "0000000040",
+                "0000000050"]
+KITTI_MAX_DISPARITY = 127  # configs/kitti_lidar.yaml labels 0..127
+
+SUITES = ["costs", "table2", "endtoend"]
+
+
+class BenchError(Exception):
+    """A measurement that failed; its message goes into the table."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Small readers (standard library only): PGM/PNG ground truth, the binary GCP PLY.
+# ---------------------------------------------------------------------------------------------
+
+def read_pgm(path):
+    """Binary PGM (P5, maxval <= 65535) -> (width, height, list of ints, row-major)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    tokens, pos = [], 0
+    while len(tokens) < 4:
+        while data[pos:pos + 1].isspace():
+            pos += 1
+        if data[pos:pos + 1] == b"#":
+            while data[pos:pos + 1] not in (b"\n", b""):
+                pos += 1
+            continue
+        start = pos
+        while not data[pos:pos + 1].isspace():
+            pos += 1
+        tokens.append(data[start:pos])
+    if tokens[0] != b"P5":
+        raise BenchError("%s: not a binary PGM (P5)" % path)
+    width, height, maxval = int(tokens[1]), int(tokens[2]), int(tokens[3])
+    pos += 1  # the single whitespace after maxval
+    if maxval < 256:
+        values = list(data[pos:pos + width * height])
+    else:
+        values = list(struct.unpack(">%dH" % (width * height), data[pos:pos + 2 * width * height]))
+    if len(values) != width * height:
+        raise BenchError("%s: truncated PGM" % path)
+    return width, height, values
+
+
+def read_png_grey(path):
+    """Non-interlaced 8/16-bit PNG (grey, grey+alpha, RGB, RGBA; first channel) ->
+    (width, height, list of ints, row-major)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        raise BenchError("%s: not a PNG" % path)
+    pos, idat, header = 8, [], None
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos:pos + 4])
+        kind = data[pos + 4:pos + 8]
+        body = data[pos + 8:pos + 8 + length]
+        pos += 12 + length
+        if kind == b"IHDR":
+            header = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat.append(body)
+        elif kind == b"IEND":
+            break
+    width, height, depth, color, _, _, interlace = header
+    channels = {0: 1, 2: 3, 4: 2, 6: 4}.get(color)
+    if channels is None or depth not in (8, 16) or interlace:
+        raise BenchError("%s: unsupported PNG (colour type %d, depth %d, interlace %d)"
+                         % (path, color, depth, interlace))
+    bpp = channels * depth // 8
+    stride = width * bpp
+    raw = zlib.decompress(b"".join(idat))
+    out = bytearray(height * stride)
+    prev = bytearray(stride)
+    for r in range(height):
+        ftype = raw[r * (stride + 1)]
+        line = bytearray(raw[r * (stride + 1) + 1:(r + 1) * (stride + 1)])
+        if ftype == 1:
+            for i in range(bpp, stride):
+                line[i] = (line[i] + line[i - bpp]) & 255
+        elif ftype == 2:
+            for i in range(stride):
+                line[i] = (line[i] + prev[i]) & 255
+        elif ftype == 3:
+            for i in range(stride):
+                left = line[i - bpp] if i >= bpp else 0
+                line[i] = (line[i] + ((left + prev[i]) >> 1)) & 255
+        elif ftype == 4:
+            for i in range(stride):
+                a = line[i - bpp] if i >= bpp else 0
+                b = prev[i]
+                c = prev[i - bpp] if i >= bpp else 0
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                pred = a if (pa <= pb and pa <= pc) else (b if pb <= pc else c)
+                line[i] = (line[i] + pred) & 255
+        out[r * stride:(r + 1) * stride] = line
+        prev = line
+    if depth == 8:
+        values = list(out[0::bpp])
+    else:
+        values = [(out[i] << 8) | out[i + 1] for i in range(0, len(out), bpp)]
+    return width, height, values
+
+
+def read_gt_disparity(path, divisor):
+    """Ground-truth disparity (GT convention) as (width, height, list of float or None)."""
+    reader = read_pgm if path.lower().endswith((".pgm", ".ppm")) else read_png_grey
+    width, height, values = reader(path)
+    return width, height, [v / divisor if v > 0 else None for v in values]
+
+
+def read_gcp_ply(path):
+    """gcps.ply (binary little-endian, written by gcpstereo) -> list of (col, row, depth)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    end = data.find(b"end_header\n")
+    if end < 0:
+        raise BenchError("%s: no PLY header" % path)
+    header = data[:end].decode("ascii", "replace").splitlines()
+    if "format binary_little_endian 1.0" not in header:
+        raise BenchError("%s: not a binary little-endian PLY" % path)
+    types = {"char": "b", "uchar": "B", "short": "h", "ushort": "H", "int": "i", "uint": "I",
+             "float": "f", "double": "d", "int8": "b", "uint8": "B", "int32": "i",
+             "float32": "f", "float64": "d"}
+    count, names, fmt = 0, [], "<"
+    for line in header:
+        parts = line.split()
+        if parts[:2] == ["element", "vertex"]:
+            count = int(parts[2])
+        elif parts[:1] == ["property"] and count:
+            fmt += types[parts[1]]
+            names.append(parts[2])
+    for needed in ("col", "row", "depth"):
+        if needed not in names:
+            raise BenchError("%s: no vertex property '%s'" % (path, needed))
+    size = struct.calcsize(fmt)
+    body = data[end + len(b"end_header\n"):]
+    if len(body) < count * size:
+        raise BenchError("%s: truncated PLY" % path)
+    ic, ir, idp = names.index("col"), names.index("row"), names.index("depth")
+    return [(v[ic], v[ir], v[idp]) for v in struct.iter_unpack(fmt, body[:count * size])]
+
+
+# ---------------------------------------------------------------------------------------------
+# Running the programs.
+# ---------------------------------------------------------------------------------------------
+
+def fmt_seconds(s):
+    return "%.1f s" % s if s < 120 else "%.1f min" % (s / 60)
+
+
+class Runner:
+    def __init__(self, args):
+        self.build = os.path.abspath(args.build)
+        self.data = os.path.abspath(args.data)
+        self.out = os.path.abspath(args.out)
+        self.reuse = args.reuse
+        self.timeout = args.timeout
+        self.gcpstereo = os.path.join(self.build, "gcpstereo")
+        self.sgbm_program = os.path.join(self.build, "tools", "benchmarks",
+                                         "gcpstereo_sgbm_baseline")
+        self.runs = os.path.join(self.out, "runs")
+        self.count = 0
+        self.done = {}  # key -> command run successfully in this invocation (reused, never rerun)
+
+    def log(self, message):
+        print("[%s] %s" % (datetime.datetime.now().strftime("%H:%M:%S"), message), flush=True)
+
+    def _execute(self, key, command, folder, product):
+        """Runs `command`, logging to folder/bench.log; returns product's path. With --reuse, a
+        folder holding `product` and the same command is not run again."""
+        stamp = os.path.join(folder, "bench_command.json")
+        product_path = os.path.join(folder, product)
+        if self.done.get(key) == command and os.path.exists(product_path):
+            return product_path
+        if self.reuse and os.path.exists(product_path) and os.path.exists(stamp):
+            with open(stamp) as f:
+                if json.load(f) == command:
+                    self.log("reuse   %s" % key)
+                    return product_path
+        if os.path.isdir(folder):
+            shutil.rmtree(folder)
+        os.makedirs(folder)
+        self.count += 1
+        self.log("run     %s" % key)
+        start = time.monotonic()
+        try:
+            with open(os.path.join(folder, "bench.log"), "w") as log:
+                log.write(" ".join(command) + "\n")
+                log.flush()
+                proc = subprocess.run(command, stdout=log, stderr=subprocess.PIPE, text=True,
+                                      timeout=self.timeout, cwd=REPO)
+                log.write(proc.stderr)
+        except subprocess.TimeoutExpired:
+            raise BenchError("timed out after %d s" % self.timeout)
+        except OSError as e:
+            raise BenchError("cannot start %s: %s" % (command[0], e.strerror))
+        elapsed = time.monotonic() - start
+        if proc.returncode != 0:
+            lines = [l for l in proc.stderr.strip().splitlines() if l.strip()]
+            message = lines[-1] if lines else "exit status %d" % proc.returncode
+            self.log("FAILED  %s (%s): %s" % (key, fmt_seconds(elapsed), message))
+            raise BenchError(message)
+        if not os.path.exists(product_path):
+            raise BenchError("no %s written" % product)
+        with open(stamp, "w") as f:
+            json.dump(command, f)
+        self.done[key] = command
+        self.log("done    %s (%s)" % (key, fmt_seconds(elapsed)))
+        return product_path
+
+    def run(self, key, config, sets):
+        """gcpstereo run CONFIG -o OUT/runs/KEY --set ...; returns (report dict, run folder)."""
+        folder = os.path.join(self.runs, key)
+        command = [self.gcpstereo, "run", os.path.join(REPO, "configs", config), "-o", folder,
+                   "-q"]
+        for item in sets:
+            command += ["--set", item]
+        report = self._execute(key, command, folder, "report.json")
+        with open(report) as f:
+            return json.load(f), folder
+
+    def eval_disparity(self, key, disparity, scene):
+        folder = os.path.join(self.runs, key)
+        d = os.path.join(self.data, "middlebury", scene["folder"])
+        command = [self.gcpstereo, "eval", "-q", "--disparity", disparity,
+                   "--gt-disparity", os.path.join(d, scene["gt"]),
+                   "--gt-scale", str(scene["gt_scale"]), "--report",
+                   os.path.join(folder, "eval.json")]
+        masks = [m for m in ("nonocc", "all", "disc") if os.path.exists(os.path.join(d, m + ".png"))]
+        for m in masks:
+            command += ["--" + m, os.path.join(d, m + ".png")]
+        if not masks and scene["gt_right"]:
+            command += ["--gt-disparity-right", os.path.join(d, scene["gt_right"])]
+        report = self._execute(key, command, folder, "eval.json")
+        with open(report) as f:
+            return json.load(f)
+
+    def sgbm(self, key, args):
+        folder = os.path.join(self.runs, key)
+        command = [self.sgbm_program] + args + ["-o", os.path.join(folder, "disparity.pfm"),
+                                        "--report", os.path.join(folder, "sgbm.json")]
+        report = self._execute(key, command, folder, "sgbm.json")
+        with open(report) as f:
+            return json.load(f), folder
+
+    def synth(self, preset):
+        """The synthetic scene OUT/data/synth-<preset>, generated once."""
+        folder = os.path.join(self.out, "data", "synth-" + preset)
+        if os.path.exists(os.path.join(folder, "gt", "laser.ply")):
+            return folder
+        command = [self.gcpstereo, "synth", "--preset", preset, "-o", folder, "-q"]
+        self._execute("synth-" + preset, command, folder, os.path.join("gt", "laser.ply"))
+        return folder
+
+
+def dig(obj, *path):
+    """obj[path[0]][path[1]]...; BenchError naming the missing key."""
+    for p in path:
+        try:
+            obj = obj[p]
+        except (KeyError, IndexError, TypeError):
+            raise BenchError("report has no %s" % ".".join(str(x) for x in path))
+    return obj
+
+
+def bad1(metrics_map, region):
+    """bad-1 percent (threshold index 1 of 0.5/1/2) of a middlebury.<map>.<region> entry."""
+    return dig(metrics_map, region, "bad_percent", 1)
+
+
+def measure(results, name, function):
+    """results[name] = function() or {"error": message}; never raises for BenchError/OSError."""
+    try:
+        results[name] = function()
+    except BenchError as e:
+        results[name] = {"error": str(e)}
+    except Exception as e:  # a bug or an unexpected report: recorded, the suite goes on
+        results[name] = {"error": "%s: %s" % (type(e).__name__, e)}
+    return results[name]
+
+
+# ---------------------------------------------------------------------------------------------
+# Scene configuration helpers.
+# ---------------------------------------------------------------------------------------------
+
+def middlebury_path(runner, scene):
+    return os.path.join(runner.data, "middlebury", scene["folder"])
+
+
+def stereo_sets(runner, scene):
+    """configs/middlebury_stereo.yaml on the ground-truth pair of `scene`."""
+    return ["dataset.path=" + middlebury_path(runner, scene),
+            "dataset.reference=" + scene["reference"],
+            "dataset.neighbors=[%s]" % scene["right"],
+            "labels.min=0", "labels.max=%d" % scene["max_disparity"],
+            "labels.count=%d" % (scene["max_disparity"] + 1)]
+
+
+def multiview_sets(runner, scene):
+    """configs/middlebury_multiview.yaml on all other views (at most 6), same integer labels."""
+    return ["dataset.path=" + middlebury_path(runner, scene),
+            "dataset.reference=" + scene["reference"],
+            "dataset.neighbors=[%s]" % ",".join(scene["multiview_neighbors"]),
+            "labels.min=0", "labels.max=%d" % scene["max_disparity"],
+            "labels.count=%d" % (scene["max_disparity"] + 1),
+            "cost.method=plane_sweep"]
+
+
+def kitti_sets(runner, frame):
+    drive = os.path.join(runner.data, "kitti", KITTI_DATE, KITTI_DRIVE)
+    return ["dataset.path=" + drive, "dataset.reference=" + frame,
+            "gcp.lidar.path=" + os.path.join(drive, "velodyne_points", "data", frame + ".bin"),
+            "eval.lidar_holdout=true"]
+
+
+def gcp_outliers_from_ply(runner, scene, report, folder):
+    """Outlier rate of the GCPs in folder/gcps.ply against the scene's GT image, computed here
+    independently of the program: disparity = numerator / depth with numerator = depth of the last
+    label x its disparity (labels are disparities 0..max)."""
+    numerator = dig(report, "labels", "depth_of_last_label") * dig(report, "labels", "max")
+    width, height, gt = read_gt_disparity(
+        os.path.join(middlebury_path(runner, scene), scene["gt"]), scene["gt_scale"])
+    evaluated = outliers = 0
+    for col, row, depth in read_gcp_ply(os.path.join(folder, "gcps.ply")):
+        if not (0 <= col < width and 0 <= row < height) or not depth > 0:
+            continue
+        truth = gt[row * width + col]
+        if truth is None:
+            continue
+        evaluated += 1
+        # 1e-4: the PLY stores depth as float32; exact 1-px ties must stay inliers as in the
+        # program (integer GCP disparities against integer or thirds-of-a-pixel ground truth).
+        outliers += abs(numerator / depth - truth) > 1.0 + 1e-4
+    return {"evaluated": evaluated, "outliers": outliers,
+            "percent": 100.0 * outliers / evaluated if evaluated else None}
+
+
+# ---------------------------------------------------------------------------------------------
+# Suites. Each returns {"rows": {...}, "markdown": str}.
+# ---------------------------------------------------------------------------------------------
+
+def suite_costs(runner, scenes, frames, include_synthetic):
+    rows = {}
+    for scene in scenes:
+        name = scene["name"]
+        row = rows.setdefault(name, {})
+
+        def bt_wta():
+            # Stereo GCPs on (their density, outliers and D^ come with this run); WTA ignores them.
+            report, folder = runner.run("costs/%s/bt_wta" % name, "middlebury_stereo.yaml",
+                                        stereo_sets(runner, scene) + ["optimizer.method=wta"])
+            m = dig(report, "metrics", "middlebury")
+            out = {"wta_nonocc": bad1(m["result"], "nonocc"), "wta_all": bad1(m["result"], "all"),
+                   "seconds": report.get("total_seconds"),
+                   "gcp_count": dig(report, "gcps", "count"),
+                   "gcp_density_percent": dig(report, "gcps", "density_percent"),
+                   "gcp_outlier_percent": dig(report, "gcps", "outliers", "percent"),
+                   "propagated_nonocc": bad1(dig(m, "propagated"), "nonocc"),
+                   "propagated_all": bad1(dig(m, "propagated"), "all")}
+            check = gcp_outliers_from_ply(runner, scene, report, folder)
+            out["gcp_outlier_percent_script"] = check["percent"]
+            out["gcp_outlier_evaluated_script"] = check["evaluated"]
+            return out
+
+        def ps_wta():
+            report, _ = runner.run("costs/%s/planesweep_wta" % name, "middlebury_multiview.yaml",
+                                   multiview_sets(runner, scene) +
+                                   ["gcp.sources=[]", "optimizer.method=wta"])
+            m = dig(report, "metrics", "middlebury", "result")
+            return {"wta_nonocc": bad1(m, "nonocc"), "wta_all": bad1(m, "all"),
+                    "neighbors": len(scene["multiview_neighbors"]),
+                    "seconds": report.get("total_seconds")}
+
+        def gt_gcps():
+            d = middlebury_path(runner, scene)
+            report, _ = runner.run("costs/%s/gt_gcps_s16" % name, "middlebury_multiview.yaml",
+                                   multiview_sets(runner, scene) +
+                                   ["gcp.sources=[depth_map]",
+                                    "gcp.depth_map.path=" + os.path.join(d, scene["gt"]),
+                                    "gcp.depth_map.kind=disparity",
+                                    "gcp.depth_map.scale=%d" % scene["gt_scale"],
+                                    "gcp.downsample=16", "optimizer.method=wta"])
+            m = dig(report, "metrics", "middlebury", "propagated")
+            return {"propagated_nonocc": bad1(m, "nonocc"), "propagated_all": bad1(m, "all"),
+                    "gcp_count": dig(report, "gcps", "count"),
+                    "gcp_density_percent": dig(report, "gcps", "density_percent")}
+
+        measure(row, "birchfield_tomasi", bt_wta)
+        measure(row, "plane_sweep", ps_wta)
+        measure(row, "gt_gcps_s16", gt_gcps)
+
+    kitti = {}
+    for frame in frames:
+        def kitti_wta():
+            report, _ = runner.run("costs/kitti_%s/bt_wta" % frame, "kitti_lidar.yaml",
+                                   kitti_sets(runner, frame) + ["optimizer.method=wta"])
+            h = dig(report, "metrics", "lidar_holdout")
+            return {"wta_bad3": dig(h, "result", "bad3_percent"),
+                    "wta_bad1": dig(h, "result", "bad1_percent"),
+                    "held_out_points": dig(h, "result", "counted"),
+                    "propagated_bad3": dig(h, "propagated", "bad3_percent"),
+                    "seconds": report.get("total_seconds")}
+        measure(kitti, frame, kitti_wta)
+
+    synthetic = {}
+
+    def synth_wta():
+        data = runner.synth("small")
+        report, _ = runner.run("costs/synth_small/planesweep_wta", "synthetic_fountain.yaml",
+                               ["dataset.path=" + data,
+                                "gcp.lidar.path=" + os.path.join(data, "gt", "laser.ply"),
+                                "labels.count=128", "optimizer.tiles=[1, 1]",
+                                "optimizer.tile_overlap=0", "optimizer.method=wta"])
+        h = dig(report, "metrics", "depth_sigma")
+        return {"wta_within_3sigma": dig(h, "result", "within_n_sigma_percent", 2),
+                "propagated_within_3sigma": dig(h, "propagated", "within_n_sigma_percent", 2),
+                "neighbors": len(dig(report, "dataset", "neighbors")),
+                "seconds": report.get("total_seconds")}
+    if include_synthetic:
+        measure(synthetic, "small", synth_wta)
+
+    md = ["# costs — matching costs and GCPs without energy minimisation", "",
+          "Middlebury, bad-1 (%, |d − gt| > 1 px in the GT convention, missing = bad). WTA = "
+          "winner-take-all on integer disparity labels 0…max. BT = two-view Birchfield–Tomasi on "
+          "the GT pair (middlebury_stereo.yaml); PS = multi-view plane sweep, reference + n "
+          "neighbours (middlebury_multiview.yaml, gcp.sources=[]). Stereo GCPs (§4.1): density = "
+          "% of pixels, outliers = |d − gt| > 1 px among GCPs with GT (report.json / recomputed "
+          "by this script from gcps.ply); D̂ = propagated GCPs (eq. 5). GT GCPs: one ground-truth "
+          "value per 16×16 block.", "",
+          "| scene | BT WTA nonocc | BT WTA all | PS WTA nonocc | PS WTA all | PS n | "
+          "stereo GCP density % | GCP outliers % (report / script) | D̂ stereo nonocc | "
+          "D̂ stereo all | D̂ GT s=16 nonocc | D̂ GT s=16 all |",
+          "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for scene in scenes:
+        r = rows[scene["name"]]
+        bt, ps, gt = r["birchfield_tomasi"], r["plane_sweep"], r["gt_gcps_s16"]
+        md.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            scene["name"], cell(bt, "wta_nonocc"), cell(bt, "wta_all"), cell(ps, "wta_nonocc"),
+            cell(ps, "wta_all"), cell(ps, "neighbors", "%d"), cell(bt, "gcp_density_percent"),
+            pair_cell(bt, "gcp_outlier_percent", "gcp_outlier_percent_script"),
+            cell(bt, "propagated_nonocc"), cell(bt, "propagated_all"),
+            cell(gt, "propagated_nonocc"), cell(gt, "propagated_all")))
+    md += ["", "KITTI raw %s, configs/kitti_lidar.yaml with eval.lidar_holdout=true (8×8 "
+           "checkerboard: half of the scan as GCPs, half scored). WTA of the two-view BT cost; "
+           "bad-3 = |e| > 3 px and > 5 %%; D̂ = propagated LiDAR GCPs." % KITTI_DRIVE, "",
+           "| frame | held-out points | WTA bad-3 % | WTA bad-1 % | D̂ bad-3 % |",
+           "|---|---:|---:|---:|---:|"]
+    for frame in frames:
+        k = kitti[frame]
+        md.append("| %s | %s | %s | %s | %s |" % (frame, cell(k, "held_out_points", "%d"),
+                                                  cell(k, "wta_bad3"), cell(k, "wta_bad1"),
+                                                  cell(k, "propagated_bad3")))
+    md += ["", "Synthetic `small` scene (gcpstereo synth, seed 1): synthetic_fountain.yaml with 128 "
+           "depth labels, no tiling, plane sweep over the other views; share of pixels within "
+           "3σ of the exact depth (σ = the simulated laser's).", "",
+           "| scene | neighbours | WTA within 3σ % | D̂ (laser GCPs, s=16) within 3σ % |",
+           "|---|---:|---:|---:|"]
+    for name, s in synthetic.items():
+        md.append("| %s | %s | %s | %s |" % (name, cell(s, "neighbors", "%d"),
+                                             cell(s, "wta_within_3sigma"),
+                                             cell(s, "propagated_within_3sigma")))
+    return {"middlebury": rows, "kitti": kitti, "synthetic": synthetic, "markdown": "\n".join(md)}
+
+
+def suite_table2(runner, scenes):
+    rows = {}
+    for scene in scenes:
+        name = scene["name"]
+        row = rows.setdefault(name, {})
+
+        def variant(use_gcp_energy):
+            def run():
+                report, _ = runner.run(
+                    "table2/%s/%s" % (name, "with_gcp" if use_gcp_energy else "without_gcp"),
+                    "middlebury_stereo.yaml",
+                    stereo_sets(runner, scene) +
+                    ["optimizer.use_gcp_energy=%s" % ("true" if use_gcp_energy else "false")])
+                m = dig(report, "metrics", "middlebury")
+                out = {region: bad1(m["result"], region) for region in ("nonocc", "all", "disc")}
+                out["seconds"] = report.get("total_seconds")
+                out["cost_and_optimization_seconds"] = dig(
+                    report, "stages", "cost_and_optimization", "seconds")
+                if use_gcp_energy:
+                    out["propagated"] = {region: bad1(dig(m, "propagated"), region)
+                                         for region in ("nonocc", "all", "disc")}
+                    out["gcp_count"] = dig(report, "gcps", "count")
+                    out["gcp_outlier_percent"] = dig(report, "gcps", "outliers", "percent")
+                return out
+            return run
+
+        measure(row, "without_gcp_energy", variant(False))
+        measure(row, "with_gcp_energy", variant(True))
+
+    md = ["# table2 — the paper's Table 2 (Middlebury, two-view)", "",
+          "configs/middlebury_stereo.yaml on the GT pair, stereo GCPs (§4.1), integer disparity "
+          "labels 0…max; bad-1 (%, |d − gt| > 1 px, missing = bad) in the nonocc / all / disc "
+          "regions (official masks for tsukuba and venus; for the 2006 sets all three are derived "
+          "by gcpstereo from a left-right check of disp1/disp5). D = graph cuts without the GCP energy "
+          "(optimizer.use_gcp_energy=false); D̂ = the propagated GCPs (eq. 5); D + GCP = the full "
+          "energy (eqs. 1–8). Times are the whole run (load … write).", "",
+          "| scene | D nonocc | D all | D disc | D̂ nonocc | D̂ all | D̂ disc | D+GCP nonocc | "
+          "D+GCP all | D+GCP disc | GCPs (outliers %) | time D | time D+GCP |",
+          "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for scene in scenes:
+        r = rows[scene["name"]]
+        d, g = r["without_gcp_energy"], r["with_gcp_energy"]
+        p = g.get("propagated", g if "error" in g else {})
+        gcps = ("error" if "error" in g else
+                "%s (%s)" % (cell(g, "gcp_count", "%d"), cell(g, "gcp_outlier_percent")))
+        md.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            scene["name"], cell(d, "nonocc"), cell(d, "all"), cell(d, "disc"),
+            cell(p, "nonocc"), cell(p, "all"), cell(p, "disc"),
+            cell(g, "nonocc"), cell(g, "all"), cell(g, "disc"), gcps,
+            cell(d, "seconds", "%.1f s"), cell(g, "seconds", "%.1f s")))
+    add_errors(md, rows)
+    return {"middlebury": rows, "markdown": "\n".join(md)}
+
+
+def stage_seconds(report):
+    return {name: stage.get("seconds") for name, stage in sorted(report.get("stages", {}).items())}
+
+
+def suite_endtoend(runner, scenes, frames, include_fountain):
+    rows = {}  # ordered: data set -> measurement
+
+    def summary(report):
+        return {"stages": stage_seconds(report), "total_seconds": report.get("total_seconds"),
+                "peak_memory_bytes": report.get("peak_memory_bytes"),
+                "gcp_count": report.get("gcps", {}).get("count"),
+                "labels": report.get("labels", {}).get("count"),
+                "size": "%sx%s" % (report.get("dataset", {}).get("reference", {}).get("width"),
+                                   report.get("dataset", {}).get("reference", {}).get("height"))}
+
+    for scene in scenes:
+        name = scene["name"]
+
+        def middlebury():
+            report, _ = runner.run("table2/%s/with_gcp" % name, "middlebury_stereo.yaml",
+                                   stereo_sets(runner, scene) + ["optimizer.use_gcp_energy=true"])
+            out = summary(report)
+            m = dig(report, "metrics", "middlebury", "result")
+            out["bad1_nonocc"], out["bad1_all"] = bad1(m, "nonocc"), bad1(m, "all")
+            out["metrics"] = "bad-1 nonocc %.2f %%, all %.2f %%" % (out["bad1_nonocc"],
+                                                                    out["bad1_all"])
+            return out
+        measure(rows, "middlebury " + name, middlebury)
+
+        def sgbm():
+            s, folder = runner.sgbm("endtoend/sgbm_%s" % name, [
+                "--format", "middlebury", "--path", middlebury_path(runner, scene),
+                "--reference", scene["reference"], "--neighbor", scene["right"],
+                "--num-disparities", str(scene["sgbm_num_disparities"]),
+                "--filled-output", os.path.join(runner.runs, "endtoend", "sgbm_%s" % name,
+                                                "disparity_filled.pfm")])
+            e = runner.eval_disparity("endtoend/sgbm_%s/eval" % name,
+                                      os.path.join(folder, "disparity.pfm"), scene)
+            f = runner.eval_disparity("endtoend/sgbm_%s/eval_filled" % name,
+                                      os.path.join(folder, "disparity_filled.pfm"), scene)
+            m = dig(e, "metrics", "middlebury", "result")
+            mf = dig(f, "metrics", "middlebury", "result")
+            out = {"total_seconds": s["seconds"], "stages": {"sgbm": s["seconds"]},
+                   "invalid_percent": s["invalid_percent"],
+                   "bad1_nonocc": bad1(m, "nonocc"), "bad1_all": bad1(m, "all"),
+                   "filled_bad1_nonocc": bad1(mf, "nonocc"), "filled_bad1_all": bad1(mf, "all"),
+                   "size": "%dx%d" % (s["width"], s["height"])}
+            out["metrics"] = ("bad-1 nonocc %.2f %%, all %.2f %% (%.1f %% invalid = bad); "
+                              "background-filled: nonocc %.2f %%, all %.2f %%" % (
+                                  out["bad1_nonocc"], out["bad1_all"], s["invalid_percent"],
+                                  out["filled_bad1_nonocc"], out["filled_bad1_all"]))
+            return out
+        measure(rows, "SGBM middlebury " + name, sgbm)
+
+    for frame in frames:
+        def kitti():
+            report, _ = runner.run("endtoend/kitti_%s" % frame, "kitti_lidar.yaml",
+                                   kitti_sets(runner, frame))
+            out = summary(report)
+            h = dig(report, "metrics", "lidar_holdout", "result")
+            out["bad3"], out["bad1"] = h["bad3_percent"], h["bad1_percent"]
+            out["metrics"] = "held-out LiDAR bad-3 %.2f %%, bad-1 %.2f %% (%d points)" % (
+                h["bad3_percent"], h["bad1_percent"], h["counted"])
+            return out
+        measure(rows, "kitti " + frame, kitti)
+
+        def sgbm():
+            drive = os.path.join(runner.data, "kitti", KITTI_DATE, KITTI_DRIVE)
+            s, _ = runner.sgbm("endtoend/sgbm_kitti_%s" % frame, [
+                "--format", "kitti_raw", "--path", drive, "--reference", frame,
+                "--num-disparities", str(KITTI_MAX_DISPARITY + 1), "--lidar-holdout",
+                "--filled-output", os.path.join(runner.runs, "endtoend", "sgbm_kitti_%s" % frame,
+                                                "disparity_filled.pfm")])
+            h = dig(s, "lidar_holdout", "result")
+            hf = dig(s, "lidar_holdout", "filled")
+            out = {"total_seconds": s["seconds"], "stages": {"sgbm": s["seconds"]},
+                   "invalid_percent": s["invalid_percent"], "bad3": h["bad3_percent"],
+                   "bad1": h["bad1_percent"], "filled_bad3": hf["bad3_percent"],
+                   "filled_bad1": hf["bad1_percent"],
+                   "size": "%dx%d" % (s["width"], s["height"])}
+            out["metrics"] = ("held-out LiDAR bad-3 %.2f %%, bad-1 %.2f %% (%d points; %.1f %% "
+                              "invalid = bad); background-filled: bad-3 %.2f %%, bad-1 %.2f %%"
+                              % (h["bad3_percent"], h["bad1_percent"], h["counted"],
+                                 s["invalid_percent"], hf["bad3_percent"], hf["bad1_percent"]))
+            return out
+        measure(rows, "SGBM kitti " + frame, sgbm)
+
+    if include_fountain:
+        def fountain():
+            path = os.path.join(runner.data, "strecha", "fountain-P11")
+            report, _ = runner.run("endtoend/fountain-P11", "fountain_p11.yaml",
+                                   ["dataset.path=" + path])
+            out = summary(report)
+            out["metrics"] = "none (no laser ground truth in the shared data)"
+            return out
+        measure(rows, "fountain-P11", fountain)
+
+        def synthetic_fountain():
+            data = runner.synth("fountain")
+            report, _ = runner.run("endtoend/synthetic-fountain", "synthetic_fountain.yaml",
+                                   ["dataset.path=" + data,
+                                    "gcp.lidar.path=" + os.path.join(data, "gt", "laser.ply")])
+            out = summary(report)
+            h = dig(report, "metrics", "depth_sigma")
+            out["metrics"] = "within 3σ: D+GCP %.2f %%, D̂ %.2f %%" % (
+                dig(h, "result", "within_n_sigma_percent", 2),
+                dig(h, "propagated", "within_n_sigma_percent", 2))
+            out["within_3sigma"] = dig(h, "result", "within_n_sigma_percent", 2)
+            return out
+        measure(rows, "synthetic fountain", synthetic_fountain)
+
+    md = ["# endtoend — full runs: stage times, peak memory, main metrics; OpenCV SGBM alongside",
+          "", "gcpstereo rows: the shipped configuration of each data set (Middlebury: "
+          "middlebury_stereo.yaml with the GCP energy; KITTI: kitti_lidar.yaml with "
+          "eval.lidar_holdout=true). SGBM rows: gcpstereo_sgbm_baseline (MODE_SGBM_3WAY, block 5, "
+          "P1 = 8·3·5², P2 = 32·3·5²) on the same rectified GT pair, timed around compute() only, "
+          "scored with gcpstereo eval (Middlebury) or on the same held-out LiDAR points (KITTI); "
+          "invalid SGBM pixels count as bad; the 'background-filled' scores fill them first as "
+          "the KITTI devkit does (interpolateBackground).", "",
+          "| data set | size | labels | GCPs | load | gcps | propagation | cost+opt | "
+          "evaluation | write | total | peak MB | metrics |",
+          "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+    for name, r in rows.items():
+        if "error" in r:
+            md.append("| %s | | | | | | | | | | | | error: %s |" % (name, r["error"]))
+            continue
+        st = r.get("stages", {})
+
+        def sec(stage):
+            return "%.2f" % st[stage] if st.get(stage) is not None else ""
+        peak = r.get("peak_memory_bytes")
+        md.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            name, r.get("size", ""), r.get("labels") or "", r.get("gcp_count") or "",
+            sec("load"), sec("gcps"), sec("propagation"),
+            sec("cost_and_optimization") or sec("sgbm"), sec("evaluation"), sec("write"),
+            cell(r, "total_seconds"), "%.0f" % (peak / 1e6) if peak else "", r.get("metrics", "")))
+    md += ["", "Times in seconds. SGBM's `cost+opt` column is its compute() time."]
+    return {"rows": rows, "markdown": "\n".join(md)}
+
+
+def cell(obj, key, fmt="%.2f"):
+    if "error" in obj:
+        return "error"
+    value = obj.get(key)
+    return "" if value is None else fmt % value
+
+
+def pair_cell(obj, a, b):
+    if "error" in obj:
+        return "error"
+    return "%s / %s" % (cell(obj, a), cell(obj, b))
+
+
+def add_errors(md, rows):
+    errors = ["- %s %s: %s" % (scene, what, r["error"])
+              for scene, row in rows.items() for what, r in row.items() if "error" in r]
+    if errors:
+        md += ["", "Errors:"] + errors
+
+
+def add_cost_errors(result):
+    lines = []
+    for scene, row in result["middlebury"].items():
+        for what, r in row.items():
+            if "error" in r:
+                lines.append("- %s %s: %s" % (scene, what, r["error"]))
+    for frame, r in result["kitti"].items():
+        if "error" in r:
+            lines.append("- kitti %s: %s" % (frame, r["error"]))
+    for name, r in result["synthetic"].items():
+        if "error" in r:
+            lines.append("- synthetic %s: %s" % (name, r["error"]))
+    if lines:
+        result["markdown"] += "\n\nErrors:\n" + "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        prog="benchmark.py", description=__doc__.split("\n\n")[0],
+        epilog=__doc__[__doc__.index("Suites"):], formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--suite", choices=SUITES + ["all"], default="all",
+                        help="which suite to run (default: all)")
+    parser.add_argument("--data", default=os.path.join("..", "shared", "data"),
+                        help="benchmark data folder (default: ../shared/data)")
+    parser.add_argument("--build", default="build",
+                        help="build folder holding gcpstereo and tools/benchmarks/ (default: build)")
+    parser.add_argument("--out", default="bench-out", help="output folder (default: bench-out)")
+    parser.add_argument("--scenes", default="",
+                        help="comma-separated filter: Middlebury scene names, KITTI frames "
+                        "(e.g. 0000000010 or 'kitti' for all), 'synthetic', 'fountain' "
+                        "(default: everything)")
+    parser.add_argument("--reuse", action="store_true",
+                        help="skip runs whose folder under OUT/runs already holds the result of "
+                        "the same command (to resume an interrupted benchmark)")
+    parser.add_argument("--timeout", type=int, default=3600,
+                        help="seconds allowed per program run (default: 3600)")
+    args = parser.parse_args(argv)
+
+    runner = Runner(args)
+    for program in [runner.gcpstereo]:
+        if not os.access(program, os.X_OK):
+            parser.error("%s not found: build it first (cmake --build %s --target gcpstereo)"
+                         % (program, args.build))
+    if not os.path.isdir(runner.data):
+        parser.error("data folder %s not found (--data)" % runner.data)
+
+    wanted = [s.strip() for s in args.scenes.split(",") if s.strip()]
+
+    def selected(name, family=None):
+        return not wanted or name in wanted or (family is not None and family in wanted)
+
+    scenes = [s for s in MIDDLEBURY if selected(s["name"], "middlebury")
+              and os.path.isdir(middlebury_path(runner, s))]
+    frames = [f for f in KITTI_FRAMES if selected(f, "kitti")]
+    include_synthetic = selected("synthetic")
+    include_fountain = selected("fountain")
+
+    os.makedirs(runner.out, exist_ok=True)
+    results_path = os.path.join(runner.out, "results.json")
+    results = {}
+    if os.path.exists(results_path):
+        with open(results_path) as f:
+            results = json.load(f)  # other suites' results are kept
+    results["environment"] = {"build": runner.build, "data": runner.data,
+                              "host": platform.node(), "python": platform.python_version(),
+                              "cpus": os.cpu_count(), "command": " ".join(sys.argv)}
+    suites = SUITES if args.suite == "all" else [args.suite]
+    started = time.monotonic()
+    for suite in suites:
+        runner.log("suite %s: %d Middlebury scenes, %d KITTI frames" % (suite, len(scenes),
+                                                                       len(frames)))
+        t0 = time.monotonic()
+        if suite == "costs":
+            result = suite_costs(runner, scenes, frames, include_synthetic)
+            add_cost_errors(result)
+        elif suite == "table2":
+            result = suite_table2(runner, scenes)
+        else:
+            result = suite_endtoend(runner, scenes, frames, include_fountain)
+        result["seconds"] = time.monotonic() - t0
+        result["finished"] = datetime.datetime.now().isoformat(timespec="seconds")
+        results[suite] = result
+        with open(os.path.join(runner.out, suite + ".md"), "w") as f:
+            f.write(result["markdown"] + "\n")
+        with open(results_path + ".tmp", "w") as f:
+            json.dump(results, f, indent=2, sort_keys=True)
+        os.replace(results_path + ".tmp", results_path)
+        print()
+        print(result["markdown"])
+        print()
+        runner.log("suite %s done in %s -> %s" % (suite, fmt_seconds(result["seconds"]),
+                                                  os.path.join(runner.out, suite + ".md")))
+    runner.log("all done in %s (%d program runs); results in %s"
+               % (fmt_seconds(time.monotonic() - started), runner.count, results_path))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
