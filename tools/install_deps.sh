@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake pkg-config git
+  build-essential cmake pkg-config git python3
   libeigen3-dev libopencv-dev libpcl-dev libsuitesparse-dev libceres-dev libassimp-dev
   libyaml-cpp-dev libmaxflow-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
