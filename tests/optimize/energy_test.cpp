@@ -11,14 +11,17 @@
 namespace gcpstereo::optimize {
 namespace {
 
-TEST(EnergyOptions, DefaultsAreThePapers) {
+TEST(EnergyOptions, DefaultsAreTheDocumentedOnes) {
+  // The paper's T, γc, ε, γd; λs = 2 × 20 (its double sum over pairs), λr and η measured
+  // (energy.h).
   const EnergyOptions options;
-  EXPECT_EQ(options.lambda_s, 20.0);
+  EXPECT_EQ(options.lambda_s, 40.0);
   EXPECT_EQ(options.truncation, 2.0);
   EXPECT_EQ(options.gamma_c, 3.6);
   EXPECT_EQ(options.epsilon, 0.3);
-  EXPECT_EQ(options.lambda_r, 8.0);
+  EXPECT_EQ(options.lambda_r, 4.0);
   EXPECT_EQ(options.gamma_d, 2.0);
+  EXPECT_EQ(options.eta, 0.5);
   EXPECT_NO_THROW(options.Check());
 }
 
@@ -57,7 +60,10 @@ TEST(Energy, HandComputedTwoPixels) {
   owned.image.at<cv::Vec3b>(0, 0) = cv::Vec3b(0, 0, 0);
   owned.image.at<cv::Vec3b>(0, 1) = cv::Vec3b(3, 4, 0);  // c_pq = 5
   owned.prior.at<float>(0, 1) = 2.5f;
-  EnergyOptions options;
+  EnergyOptions options;  // the hand computation below uses the paper's printed weights
+  options.lambda_s = 20.0;
+  options.lambda_r = 8.0;
+  options.eta = 0.1;
   const MrfProblem problem = owned.View();
   const cv::Mat labels = (cv::Mat_<int>(1, 2) << 1, 0);
   EnergyBreakdown e;
