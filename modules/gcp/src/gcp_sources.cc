@@ -13,12 +13,6 @@
 namespace gcpstereo::gcp {
 namespace {
 
-std::string ToString(double value) {
-  std::ostringstream stream;
-  stream << value;
-  return stream.str();
-}
-
 constexpr double kPi = 3.14159265358979323846;
 
 }  // namespace
@@ -31,24 +25,24 @@ void LidarGcpOptions::Check() const {
   }
   if (!(max_surface_slant_deg > 0.0 && max_surface_slant_deg < 90.0)) {
     throw ConfigError(ViolatedConstraint("gcp.lidar.max_surface_slant_deg",
-                                         ToString(max_surface_slant_deg),
+                                         FormatNumber(max_surface_slant_deg),
                                          "0 < max_surface_slant_deg < 90"));
   }
   if (!(depth_tolerance >= 0.0) || !std::isfinite(depth_tolerance)) {
-    throw ConfigError(ViolatedConstraint("gcp.lidar.depth_tolerance", ToString(depth_tolerance),
+    throw ConfigError(ViolatedConstraint("gcp.lidar.depth_tolerance", FormatNumber(depth_tolerance),
                                          "depth_tolerance >= 0"));
   }
   if (!(sigma_multiplier >= 0.0) || !std::isfinite(sigma_multiplier)) {
-    throw ConfigError(ViolatedConstraint("gcp.lidar.sigma_multiplier", ToString(sigma_multiplier),
+    throw ConfigError(ViolatedConstraint("gcp.lidar.sigma_multiplier", FormatNumber(sigma_multiplier),
                                          "sigma_multiplier >= 0"));
   }
   if (!(default_sigma >= 0.0) || !std::isfinite(default_sigma)) {
-    throw ConfigError(ViolatedConstraint("gcp.lidar.default_sigma", ToString(default_sigma),
+    throw ConfigError(ViolatedConstraint("gcp.lidar.default_sigma", FormatNumber(default_sigma),
                                          "default_sigma >= 0"));
   }
   if (!(min_depth >= 0.0) || !std::isfinite(min_depth)) {
     throw ConfigError(
-        ViolatedConstraint("gcp.lidar.min_depth", ToString(min_depth), "min_depth >= 0"));
+        ViolatedConstraint("gcp.lidar.min_depth", FormatNumber(min_depth), "min_depth >= 0"));
   }
 }
 
@@ -191,7 +185,7 @@ cv::Mat DisparityToDepth(const cv::Mat& disparity, double disparity_numerator) {
     throw Error("DisparityToDepth: the disparity map must be a non-empty CV_32F image");
   }
   if (!(disparity_numerator > 0.0) || !std::isfinite(disparity_numerator)) {
-    throw Error("DisparityToDepth: disparity_numerator = " + ToString(disparity_numerator) +
+    throw Error("DisparityToDepth: disparity_numerator = " + FormatNumber(disparity_numerator) +
                 " must be > 0");
   }
   cv::Mat depth(disparity.size(), CV_32F);

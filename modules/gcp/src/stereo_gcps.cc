@@ -29,12 +29,6 @@
 namespace gcpstereo::gcp {
 namespace {
 
-std::string ToString(double value) {
-  std::ostringstream stream;
-  stream << value;
-  return stream.str();
-}
-
 struct WtaMaps {
   cv::Mat bt, ncc, aw;  // CV_32S, −1 = invalid
 };
@@ -272,9 +266,9 @@ void StereoGcpOptions::Check() const {
   if (lr_tolerance_px < 0 || lr_tolerance_px > 10) {
     fail("lr_tolerance_px", std::to_string(lr_tolerance_px), "0 <= lr_tolerance_px <= 10");
   }
-  if (!(canny_low >= 0.0)) fail("canny_low", ToString(canny_low), "canny_low >= 0");
+  if (!(canny_low >= 0.0)) fail("canny_low", FormatNumber(canny_low), "canny_low >= 0");
   if (!(canny_high >= canny_low))
-    fail("canny_high", ToString(canny_high), "canny_high >= canny_low");
+    fail("canny_high", FormatNumber(canny_high), "canny_high >= canny_low");
   if (edge_margin_px < 0 || edge_margin_px > 20) {
     fail("edge_margin_px", std::to_string(edge_margin_px), "0 <= edge_margin_px <= 20");
   }
@@ -287,10 +281,10 @@ void StereoGcpOptions::Check() const {
   if (aw_stride_px < 1 || aw_stride_px > 4) {
     fail("aw_stride_px", std::to_string(aw_stride_px), "1 <= aw_stride_px <= 4");
   }
-  if (!(aw_gamma_c > 0.0)) fail("aw_gamma_c", ToString(aw_gamma_c), "aw_gamma_c > 0");
-  if (!(aw_gamma_p > 0.0)) fail("aw_gamma_p", ToString(aw_gamma_p), "aw_gamma_p > 0");
-  if (!(aw_truncation > 0.0)) fail("aw_truncation", ToString(aw_truncation), "aw_truncation > 0");
-  if (!(sigma_px >= 0.0)) fail("sigma_px", ToString(sigma_px), "sigma_px >= 0");
+  if (!(aw_gamma_c > 0.0)) fail("aw_gamma_c", FormatNumber(aw_gamma_c), "aw_gamma_c > 0");
+  if (!(aw_gamma_p > 0.0)) fail("aw_gamma_p", FormatNumber(aw_gamma_p), "aw_gamma_p > 0");
+  if (!(aw_truncation > 0.0)) fail("aw_truncation", FormatNumber(aw_truncation), "aw_truncation > 0");
+  if (!(sigma_px >= 0.0)) fail("sigma_px", FormatNumber(sigma_px), "sigma_px >= 0");
 }
 
 StereoGcpResult ExtractStereoGcps(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
@@ -360,7 +354,7 @@ GcpSet StereoGcpsToGcpSet(const cv::Mat& disparity, double disparity_numerator, 
     throw Error("StereoGcpsToGcpSet: the disparity map must be a non-empty CV_32F image");
   }
   if (!(disparity_numerator > 0.0) || !std::isfinite(disparity_numerator)) {
-    throw Error("StereoGcpsToGcpSet: disparity_numerator = " + ToString(disparity_numerator) +
+    throw Error("StereoGcpsToGcpSet: disparity_numerator = " + FormatNumber(disparity_numerator) +
                 " must be > 0");
   }
   GcpSourceSummary local;

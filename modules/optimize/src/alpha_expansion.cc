@@ -24,12 +24,6 @@ void ThrowMaxflowError(const char* message) {
   throw Error(std::string("max-flow (libmaxflow): ") + message);
 }
 
-std::string ToString(double value) {
-  std::ostringstream s;
-  s << value;
-  return s.str();
-}
-
 // Everything one α-expansion run needs, precomputed once per region.
 class ExpansionSolver {
  public:
@@ -306,8 +300,8 @@ void CheckLabels(const MrfProblem& problem, const cv::Mat& labels, const char* w
   double min_value = 0.0, max_value = 0.0;
   cv::minMaxLoc(labels, &min_value, &max_value);
   if (min_value < 0 || max_value >= problem.num_labels()) {
-    throw Error(std::string(what) + " has labels in [" + ToString(min_value) + ", " +
-                ToString(max_value) + "], outside [0, " + std::to_string(problem.num_labels()) +
+    throw Error(std::string(what) + " has labels in [" + FormatNumber(min_value) + ", " +
+                FormatNumber(max_value) + "], outside [0, " + std::to_string(problem.num_labels()) +
                 ")");
   }
 }
@@ -395,7 +389,7 @@ void ExpansionOptions::Check() const {
   }
   if (!(convergence_tolerance >= 0.0 && convergence_tolerance < 1.0)) {
     throw ConfigError(ViolatedConstraint("optimizer.convergence_tolerance",
-                                         ToString(convergence_tolerance), "in [0, 1)"));
+                                         FormatNumber(convergence_tolerance), "in [0, 1)"));
   }
   if (candidate_block_px < 4) {
     throw ConfigError(ViolatedConstraint("optimizer.candidate_block",
@@ -517,8 +511,8 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
           const double mismatch = std::abs(direct - energy);
           result.max_energy_mismatch = std::max(result.max_energy_mismatch, mismatch);
           if (mismatch > 1e-6 * std::max(1.0, std::abs(direct))) {
-            throw Error("AlphaExpansion: the energy of the cut (" + ToString(energy) +
-                        ") differs from the direct energy (" + ToString(direct) +
+            throw Error("AlphaExpansion: the energy of the cut (" + FormatNumber(energy) +
+                        ") differs from the direct energy (" + FormatNumber(direct) +
                         ") after the move of label " + std::to_string(alpha));
           }
         }

@@ -13,14 +13,8 @@
 namespace gcpstereo::optimize {
 namespace {
 
-std::string ToString(double value) {
-  std::ostringstream s;
-  s << value;
-  return s.str();
-}
-
 void Require(bool ok, const char* key, double value, const char* constraint) {
-  if (!ok) throw ConfigError(ViolatedConstraint(key, ToString(value), constraint));
+  if (!ok) throw ConfigError(ViolatedConstraint(key, FormatNumber(value), constraint));
 }
 
 std::string SizeString(const cv::Mat& m) {

@@ -15,12 +15,6 @@
 namespace gcpstereo::optimize {
 namespace {
 
-std::string ToString(double value) {
-  std::ostringstream s;
-  s << value;
-  return s.str();
-}
-
 constexpr double kPriorSmoothing = 0.1;  // label steps; |d| ≈ √(d² + κ²) − κ in Ψ̃
 
 // r = √(dw·a)·(x − m): ½r² is the local quadratic model of data_weight·Φ.
@@ -124,11 +118,11 @@ void RefinementOptions::Check() const {
   }
   if (!(smoothness_huber > 0.0) || !std::isfinite(smoothness_huber)) {
     throw ConfigError(
-        ViolatedConstraint("optimizer.refinement_huber", ToString(smoothness_huber), "> 0"));
+        ViolatedConstraint("optimizer.refinement_huber", FormatNumber(smoothness_huber), "> 0"));
   }
   if (!(min_data_curvature > 0.0) || !std::isfinite(min_data_curvature)) {
     throw ConfigError(ViolatedConstraint("optimizer.refinement_min_curvature",
-                                         ToString(min_data_curvature), "> 0"));
+                                         FormatNumber(min_data_curvature), "> 0"));
   }
   if (num_threads < 1) {
     throw ConfigError(

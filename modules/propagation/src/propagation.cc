@@ -31,12 +31,6 @@
 namespace gcpstereo::propagation {
 namespace {
 
-std::string ToString(double value) {
-  std::ostringstream stream;
-  stream << value;
-  return stream.str();
-}
-
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -154,14 +148,14 @@ void NestedDissection(int r0, int r1, int c0, int c1, int width, const std::vect
 
 void PropagationOptions::Check() const {
   if (!(gamma > 0.0) || !std::isfinite(gamma)) {
-    throw ConfigError(ViolatedConstraint("propagation.gamma", ToString(gamma), "gamma > 0"));
+    throw ConfigError(ViolatedConstraint("propagation.gamma", FormatNumber(gamma), "gamma > 0"));
   }
   if (!(epsilon >= 0.0 && epsilon < 1.0)) {
     throw ConfigError(
-        ViolatedConstraint("propagation.epsilon", ToString(epsilon), "0 <= epsilon < 1"));
+        ViolatedConstraint("propagation.epsilon", FormatNumber(epsilon), "0 <= epsilon < 1"));
   }
   if (!(min_weight >= 0.0 && min_weight <= 1e-3)) {
-    throw ConfigError(ViolatedConstraint("propagation.min_weight", ToString(min_weight),
+    throw ConfigError(ViolatedConstraint("propagation.min_weight", FormatNumber(min_weight),
                                          "0 <= min_weight <= 1e-3"));
   }
   ParseSparseSolverKind(solver);

@@ -40,12 +40,6 @@ constexpr double kAmbient = 0.30;
 // Linear radiance that maps to white at gain 1.
 constexpr double kWhiteRadiance = 1.05;
 
-std::string Str(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 // Strecha-style camera (camera-to-world rotation R) at `center` looking at `target`, image x to
 // the right, y down, world z up.
 Camera LookAtCamera(const Vector3d& center, const Vector3d& target, double fx, double fy, double cx,
@@ -243,36 +237,36 @@ void SynthOptions::Check() const {
     fail("synth.preset", "'" + preset + "'", "one of tiny, small, fountain");
   }
   if (!(image_noise_sigma >= 0.0 && image_noise_sigma <= 20.0)) {
-    fail("synth.image_noise_sigma", Str(image_noise_sigma), "0 <= image_noise_sigma <= 20");
+    fail("synth.image_noise_sigma", FormatNumber(image_noise_sigma), "0 <= image_noise_sigma <= 20");
   }
   if (!(exposure_gain_variation >= 0.0 && exposure_gain_variation <= 0.5)) {
-    fail("synth.exposure_gain_variation", Str(exposure_gain_variation),
+    fail("synth.exposure_gain_variation", FormatNumber(exposure_gain_variation),
          "0 <= exposure_gain_variation <= 0.5");
   }
   if (!(exposure_offset_variation >= 0.0 && exposure_offset_variation <= 20.0)) {
-    fail("synth.exposure_offset_variation", Str(exposure_offset_variation),
+    fail("synth.exposure_offset_variation", FormatNumber(exposure_offset_variation),
          "0 <= exposure_offset_variation <= 20");
   }
   if (supersampling < 0 || supersampling > 8) {
     fail("synth.supersampling", std::to_string(supersampling), "0 <= supersampling <= 8");
   }
   if (!(laser_sigma_constant_m >= 0.0 && laser_sigma_constant_m <= 1.0)) {
-    fail("synth.laser_sigma_constant_m", Str(laser_sigma_constant_m),
+    fail("synth.laser_sigma_constant_m", FormatNumber(laser_sigma_constant_m),
          "0 <= laser_sigma_constant_m <= 1");
   }
   if (!(laser_sigma_per_m >= 0.0 && laser_sigma_per_m <= 0.1)) {
-    fail("synth.laser_sigma_per_m", Str(laser_sigma_per_m), "0 <= laser_sigma_per_m <= 0.1");
+    fail("synth.laser_sigma_per_m", FormatNumber(laser_sigma_per_m), "0 <= laser_sigma_per_m <= 0.1");
   }
   if (!(laser_max_incidence_deg > 0.0 && laser_max_incidence_deg <= 90.0)) {
-    fail("synth.laser_max_incidence_deg", Str(laser_max_incidence_deg),
+    fail("synth.laser_max_incidence_deg", FormatNumber(laser_max_incidence_deg),
          "0 < laser_max_incidence_deg <= 90");
   }
   if (!(laser_angular_step_rad >= 0.0 && laser_angular_step_rad <= 0.1)) {
-    fail("synth.laser_angular_step_rad", Str(laser_angular_step_rad),
+    fail("synth.laser_angular_step_rad", FormatNumber(laser_angular_step_rad),
          "0 <= laser_angular_step_rad <= 0.1");
   }
   if (!(laser_max_range_m > 0.0 && laser_max_range_m <= 1000.0)) {
-    fail("synth.laser_max_range_m", Str(laser_max_range_m), "0 < laser_max_range_m <= 1000");
+    fail("synth.laser_max_range_m", FormatNumber(laser_max_range_m), "0 < laser_max_range_m <= 1000");
   }
 }
 

@@ -31,6 +31,9 @@ class ConfigError : public Error {
   using Error::Error;
 };
 
+// A number as it appears in messages: the default stream form ("0.5", "1e-08", "inf").
+std::string FormatNumber(double value);
+
 // Formats "name = value. Violated constraint: constraint" in the style of Ceres' option checks.
 std::string ViolatedConstraint(const std::string& name, const std::string& value,
                                const std::string& constraint);
