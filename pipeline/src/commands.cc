@@ -7,11 +7,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include <nlohmann/json.hpp>
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
 #include "gcpstereo/core/progress.h"
 #include "gcpstereo/core/system.h"
-#include <nlohmann/json.hpp>
 #include "gcpstereo/pipeline/pipeline_config.h"
 #include "gcpstereo/pipeline/run.h"
 #include "gcpstereo/synth/generator.h"
@@ -63,10 +63,16 @@ int Demo(const DemoArgs& args) {
   // The same pipeline twice: with the GCP energy (laser GCPs at s = 16, the paper's Fountain
   // setting in miniature) and without it (the paper's baseline D). Only E_gcp differs.
   const std::vector<std::string> common = {
-      "dataset.format=strecha",       "dataset.path=" + data_dir, "dataset.reference=0005",
-      "labels.space=depth",           "labels.count=128",         "gcp.sources=[lidar]",
+      "dataset.format=strecha",
+      "dataset.path=" + data_dir,
+      "dataset.reference=0005",
+      "labels.space=depth",
+      "labels.count=128",
+      "gcp.sources=[lidar]",
       "gcp.lidar.path=" + (fs::path(data_dir) / "gt" / "laser.ply").string(),
-      "gcp.downsample=16",            "optimizer.tiles=[1, 1]",   "optimizer.tile_overlap=0"};
+      "gcp.downsample=16",
+      "optimizer.tiles=[1, 1]",
+      "optimizer.tile_overlap=0"};
   struct Variant {
     std::string name, title;
     bool use_gcp_energy;
@@ -86,8 +92,9 @@ int Demo(const DemoArgs& args) {
     reports.push_back(nlohmann::json::parse(summary.report_json));
   }
 
-  std::printf("\nDepth error of the reference view against the exact ground truth, in units of "
-              "the simulated laser's sigma:\n");
+  std::printf(
+      "\nDepth error of the reference view against the exact ground truth, in units of "
+      "the simulated laser's sigma:\n");
   std::printf("  %-24s %10s %10s %10s %12s %14s\n", "", "within 1σ", "within 3σ", "within 10σ",
               "mean |err| m", "time s");
   auto row = [](const char* name, const nlohmann::json& h, double seconds) {
@@ -118,10 +125,12 @@ void AddEvalOptions(CLI::App* eval, EvalArgs* a) {
   eval->footer(
       "Examples:\n"
       "  gcpstereo eval --run out/fountain\n"
-      "  gcpstereo eval --depth out/depth.pfm --gt-depth gt/0005.depth.pfm --gt-sigma gt/0005.sigma.pfm\n"
+      "  gcpstereo eval --depth out/depth.pfm --gt-depth gt/0005.depth.pfm --gt-sigma "
+      "gt/0005.sigma.pfm\n"
       "  gcpstereo eval --depth out/depth.pfm --gt-mesh laser_mesh.ply --camera 0005.jpg.camera "
       "--sigma 0.005\n"
-      "  gcpstereo eval --disparity out/disparity.pfm --gt-disparity tsukuba/truedisp.row3.col3.pgm "
+      "  gcpstereo eval --disparity out/disparity.pfm --gt-disparity "
+      "tsukuba/truedisp.row3.col3.pgm "
       "--gt-scale 16 --nonocc tsukuba/nonocc.png --all tsukuba/all.png --disc tsukuba/disc.png");
   eval->add_option("--run", a->run_folder,
                    "a finished gcpstereo run folder: scores its depth.pfm/disparity.pfm against "
@@ -138,15 +147,18 @@ void AddEvalOptions(CLI::App* eval, EvalArgs* a) {
                    "ground-truth disparity (PFM, or PNG/PGM divided by --gt-scale; 0 = unknown)");
   eval->add_option("--gt-disparity-right", a->gt_disparity_right,
                    "the right view's ground truth, to derive occlusion masks");
-  eval->add_option("--gt-scale", a->gt_scale, "divisor of integer ground-truth images "
-                   "(tsukuba 16, venus 8, 2005/2006 third size 3)")->capture_default_str();
+  eval->add_option("--gt-scale", a->gt_scale,
+                   "divisor of integer ground-truth images "
+                   "(tsukuba 16, venus 8, 2005/2006 third size 3)")
+      ->capture_default_str();
   eval->add_option("--nonocc", a->mask_nonocc, "Middlebury nonocc mask (255 = counted)");
   eval->add_option("--all", a->mask_all, "Middlebury all mask");
   eval->add_option("--disc", a->mask_disc, "Middlebury disc mask");
   eval->add_option("--border", a->border_px, "ignored border of derived masks, px")
       ->capture_default_str();
   eval->add_option("--report", a->report, "write the metrics as JSON to this file");
-  eval->add_option("--figures", a->figures, "write error maps and histograms (PNG) into this folder");
+  eval->add_option("--figures", a->figures,
+                   "write error maps and histograms (PNG) into this folder");
 }
 
 int Eval(const EvalArgs& args) {

@@ -77,9 +77,15 @@ cv::Mat RenderGcpOverlay(const cv::Mat& image_bgr, const GcpSet& gcps) {
   for (const Gcp& g : gcps.points) {
     cv::Scalar color;
     switch (g.source) {
-      case GcpSource::kLidar: color = cv::Scalar(0, 0, 255); break;      // red
-      case GcpSource::kDepthMap: color = cv::Scalar(0, 200, 0); break;   // green
-      case GcpSource::kStereo: color = cv::Scalar(255, 128, 0); break;   // blue
+      case GcpSource::kLidar:
+        color = cv::Scalar(0, 0, 255);
+        break;  // red
+      case GcpSource::kDepthMap:
+        color = cv::Scalar(0, 200, 0);
+        break;  // green
+      case GcpSource::kStereo:
+        color = cv::Scalar(255, 128, 0);
+        break;  // blue
     }
     cv::circle(out, cv::Point(g.col, g.row), radius, color, cv::FILLED, cv::LINE_AA);
   }

@@ -66,7 +66,8 @@ cv::Mat ReadDepthMapSource(const DepthMapGcpOptions& options, const Dataset& dat
     return values;
   }
   if (!dataset.rectified) {
-    throw ConfigError("gcp.depth_map.kind = disparity needs rectified data (middlebury, kitti_raw)");
+    throw ConfigError(
+        "gcp.depth_map.kind = disparity needs rectified data (middlebury, kitti_raw)");
   }
   return gcp::DisparityToDepth(values, dataset.disparity_numerator);
 }
@@ -75,7 +76,8 @@ cv::Mat ReadDepthMapSource(const DepthMapGcpOptions& options, const Dataset& dat
 
 RectifiedPair FindRectifiedPair(const Dataset& dataset, const std::string& purpose) {
   if (!dataset.rectified || dataset.neighbors.empty()) {
-    throw ConfigError(purpose + " needs a rectified pair (middlebury or kitti_raw with a neighbour)");
+    throw ConfigError(purpose +
+                      " needs a rectified pair (middlebury or kitti_raw with a neighbour)");
   }
   RectifiedPair pair;
   pair.neighbor = &dataset.neighbors.front();
@@ -83,8 +85,10 @@ RectifiedPair FindRectifiedPair(const Dataset& dataset, const std::string& purpo
       pair.neighbor->camera.center_world.x() - dataset.reference.camera.center_world.x();
   pair.numerator = dataset.reference.camera.K(0, 0) * baseline;
   if (!(pair.numerator > 0.0)) {
-    throw ConfigError(purpose + " needs the first of dataset.neighbors to be right of the "
-                      "reference view ('" + pair.neighbor->name + "' is not)");
+    throw ConfigError(purpose +
+                      " needs the first of dataset.neighbors to be right of the "
+                      "reference view ('" +
+                      pair.neighbor->name + "' is not)");
   }
   return pair;
 }
@@ -124,8 +128,7 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
               p.pixel.y() >= height - 0.5) {
             continue;
           }
-          const double value =
-              dataset.rectified ? dataset.disparity_numerator / p.depth : p.depth;
+          const double value = dataset.rectified ? dataset.disparity_numerator / p.depth : p.depth;
           result.lidar_holdout.push_back({p.pixel, value});
         }
         spdlog::info("LiDAR hold-out: {} points as GCP candidates, {} points for scoring",
@@ -136,8 +139,8 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
                                              config.gcp.lidar, &summary));
     } else if (source == "depth_map") {
       const cv::Mat depth = ReadDepthMapSource(config.gcp.depth_map, dataset, config.dataset.scale);
-      sets.push_back(gcp::GcpsFromDepthMap(depth, config.gcp.depth_map.sigma,
-                                           GcpSource::kDepthMap, &summary));
+      sets.push_back(
+          gcp::GcpsFromDepthMap(depth, config.gcp.depth_map.sigma, GcpSource::kDepthMap, &summary));
     } else if (source == "stereo") {
       const RectifiedPair pair = FindRectifiedPair(dataset, "gcp.sources: stereo");
       // Pair disparities of the label range: numerator / depth at both ends.
@@ -188,7 +191,8 @@ cv::Mat LabelMapToDepth(const cv::Mat& labels, const LabelSpace& space) {
     const float* in = float_labels.ptr<float>(r);
     float* out = depth.ptr<float>(r);
     for (int c = 0; c < labels.cols; ++c) {
-      const double d = std::isfinite(in[c]) && in[c] >= 0 ? space.DepthOfLabel(in[c]) : kInvalidDepth;
+      const double d =
+          std::isfinite(in[c]) && in[c] >= 0 ? space.DepthOfLabel(in[c]) : kInvalidDepth;
       out[c] = std::isfinite(d) && d > 0 ? static_cast<float>(d) : kInvalidDepth;
     }
   }

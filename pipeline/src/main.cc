@@ -52,14 +52,18 @@ int main(int argc, char** argv) {
   run->add_option("--set", run_args.overrides,
                   "override one dotted key, KEY=VALUE with VALUE parsed as YAML "
                   "(e.g. --set dataset.neighbors=[im1,im3]); repeatable");
-  run->footer("Every configuration key, with its default, range and unit: gcpstereo keys\n"
-              "Outputs: depth.pfm, disparity.pfm (rectified data), gcps.ply, mesh.ply, mesh.obj, "
-              "report.json,\neffective_config.yaml, *.png previews, index.html and run.log.");
+  run->footer(
+      "Every configuration key, with its default, range and unit: gcpstereo keys\n"
+      "Outputs: depth.pfm, disparity.pfm (rectified data), gcps.ply, mesh.ply, mesh.obj, "
+      "report.json,\neffective_config.yaml, *.png previews, index.html and run.log.");
 
   gcpstereo::cli::SynthArgs synth_args;
-  CLI::App* synth = app.add_subcommand("synth", "write a synthetic data set with exact ground truth");
-  synth->add_option("--preset", synth_args.preset, "tiny (~160x107), small (~640x427) or fountain "
-                    "(11 views, 1536x1024)")
+  CLI::App* synth =
+      app.add_subcommand("synth", "write a synthetic data set with exact ground truth");
+  synth
+      ->add_option("--preset", synth_args.preset,
+                   "tiny (~160x107), small (~640x427) or fountain "
+                   "(11 views, 1536x1024)")
       ->required()
       ->check(CLI::IsMember({"tiny", "small", "fountain"}));
   synth->add_option("-o,--output", synth_args.output_dir, "output folder")->required();
@@ -68,11 +72,13 @@ int main(int argc, char** argv) {
 
   gcpstereo::cli::DemoArgs demo_args;
   CLI::App* demo = app.add_subcommand(
-      "demo", "generate the synthetic small scene and run the full pipeline on it, with evaluation");
+      "demo",
+      "generate the synthetic small scene and run the full pipeline on it, with evaluation");
   demo->add_option("-o,--output", demo_args.output_dir, "output folder")->capture_default_str();
 
-  CLI::App* keys = app.add_subcommand("keys", "list every configuration key with its default, "
-                                              "range, unit and meaning");
+  CLI::App* keys = app.add_subcommand("keys",
+                                      "list every configuration key with its default, "
+                                      "range, unit and meaning");
 
   gcpstereo::cli::EvalArgs eval_args;
   CLI::App* eval = app.add_subcommand(

@@ -19,7 +19,8 @@ OutputFolder::OutputFolder(const std::string& final_dir) : final_dir_(final_dir)
   }
   fs::create_directories(final_dir, ec);
   if (ec) throw IoError(final_dir, "cannot create output folder: " + ec.message());
-  staging_dir_ = (fs::path(final_dir) / (".gcpstereo-staging-" + std::to_string(getpid()))).string();
+  staging_dir_ =
+      (fs::path(final_dir) / (".gcpstereo-staging-" + std::to_string(getpid()))).string();
   fs::remove_all(staging_dir_, ec);
   fs::create_directory(staging_dir_, ec);
   if (ec) throw IoError(staging_dir_, "cannot create staging folder: " + ec.message());

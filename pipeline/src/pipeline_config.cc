@@ -33,7 +33,8 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("labels.min", &labels.min, Range::AtLeast(0.0),
          {"lowest hypothesis in the space's unit (depth: data set unit; disparity: px in the "
           "ground truth's convention); auto = from the GCPs or the views' overlap"});
-  s->Add("labels.max", &labels.max, Range::AtLeast(0.0), {"highest hypothesis; auto as labels.min"});
+  s->Add("labels.max", &labels.max, Range::AtLeast(0.0),
+         {"highest hypothesis; auto as labels.min"});
 
   s->Add("gcp.sources", &gcp.sources, {"lidar", "depth_map", "stereo"},
          {"GCP sources; empty list = no GCP energy (the paper's baseline)"});
@@ -108,9 +109,9 @@ void PipelineConfig::Register(config::Schema* s) {
 
   s->Add("cost.method", &cost.method, {"auto", "plane_sweep", "birchfield_tomasi"},
          {"matching cost: auto = Birchfield–Tomasi for a rectified pair, plane sweep otherwise"});
-  s->Add("cost.truncation", &cost.plane_sweep.truncation, Range::GreaterThan(0.0),
-         {"plane sweep: per-neighbour truncation of the RGB difference norm", "RGB grey levels",
-          "τ"});
+  s->Add(
+      "cost.truncation", &cost.plane_sweep.truncation, Range::GreaterThan(0.0),
+      {"plane sweep: per-neighbour truncation of the RGB difference norm", "RGB grey levels", "τ"});
   s->Add("cost.aggregation", &cost.plane_sweep.aggregation, {"mean", "best_k"},
          {"plane sweep: mean over the neighbours (paper) or mean of the best k (occlusions)"});
   s->Add("cost.best_k", &cost.plane_sweep.best_k, Range::AtLeast(1),
@@ -123,11 +124,13 @@ void PipelineConfig::Register(config::Schema* s) {
          {"Birchfield–Tomasi: combine the RGB channels by sum or max"});
 
   s->Add("propagation.gamma", &propagation.gamma, Range::GreaterThan(0.0),
-         {"colour bandwidth of the affinities w = exp(−|ΔRGB|/γ) (paper: 1.25; measured best: 4)", "RGB", "γ"});
+         {"colour bandwidth of the affinities w = exp(−|ΔRGB|/γ) (paper: 1.25; measured best: 4)",
+          "RGB", "γ"});
   s->Add("propagation.epsilon", &propagation.epsilon, Range::HalfOpen(0.0, 1.0),
          {"lower bound of the affinities (paper: 0 for edge-preserving interpolation)", "", "ε"});
   s->Add("propagation.min_weight", &propagation.min_weight, Range::Between(0.0, 1.0),
-         {"links weaker than this are cut (regions without a GCP are then reported unreached); 0 = none"});
+         {"links weaker than this are cut (regions without a GCP are then reported unreached); 0 = "
+          "none"});
   s->Add("propagation.solver", &propagation.solver, {"umfpack", "cholmod"},
          {"sparse solver: UMFPACK on eq. 5 as in the paper, or CHOLMOD on its symmetric form"});
   s->Add("propagation.ordering", &propagation.ordering, {"nested_dissection", "solver"},
@@ -137,7 +140,9 @@ void PipelineConfig::Register(config::Schema* s) {
          {"graph_cuts = minimise E_data + E_smooth + E_gcp (the paper); wta = winner-take-all of "
           "the matching costs alone (no smoothness, no GCP energy, no refinement)"});
   s->Add("optimizer.lambda_s", &optimizer.energy.lambda_s, Range::AtLeast(0.0),
-         {"smoothness weight of eq. 3, each 4-neighbour pair counted once (the paper's 20 with its double sum = 40)", "energy per label step", "λs"});
+         {"smoothness weight of eq. 3, each 4-neighbour pair counted once (the paper's 20 with its "
+          "double sum = 40)",
+          "energy per label step", "λs"});
   s->Add("optimizer.truncation", &optimizer.energy.truncation, Range::GreaterThan(0.0),
          {"truncation of the linear smoothness penalty (paper: 2)", "label steps", "T"});
   s->Add("optimizer.gamma_c", &optimizer.energy.gamma_c, Range::GreaterThan(0.0),
@@ -145,12 +150,14 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("optimizer.epsilon", &optimizer.energy.epsilon, Range::Between(0.0, 1.0),
          {"lower bound of the smoothness weights, eq. 4 (paper: 0.3)", "", "ε"});
   s->Add("optimizer.lambda_r", &optimizer.energy.lambda_r, Range::AtLeast(0.0),
-         {"weight of the GCP energy, eq. 8 (paper: 8; measured best relative to the data term: 4)", "", "λr"});
+         {"weight of the GCP energy, eq. 8 (paper: 8; measured best relative to the data term: 4)",
+          "", "λr"});
   s->Add("optimizer.gamma_d", &optimizer.energy.gamma_d, Range::GreaterThan(0.0),
          {"sharpness of the robust GCP penalty, eq. 7 (paper: 2)", "label steps", "γd"});
   s->Add("optimizer.eta", &optimizer.energy.eta, Range{0.0, 1.0, false, false},
-         {"upper-bound control of the robust GCP penalty, eq. 7 (lost from the paper's text; measured: 0.5)", "",
-          "η"});
+         {"upper-bound control of the robust GCP penalty, eq. 7 (lost from the paper's text; "
+          "measured: 0.5)",
+          "", "η"});
   s->Add("optimizer.data_weight", &optimizer.energy.data_weight, Range::GreaterThan(0.0),
          {"scale of the matching costs in the energy"});
   s->Add("optimizer.use_gcp_energy", &optimizer.energy.use_gcp_energy,
@@ -179,11 +186,11 @@ void PipelineConfig::Register(config::Schema* s) {
          {"merging of the tile overlaps: mean (paper) or linear feathering"});
   s->Add("optimizer.refinement", &optimizer.refinement_method, {"none", "parabola", "ceres"},
          {"sub-label refinement after graph cuts"});
-  s->Add("optimizer.refinement_iterations", &optimizer.refinement.max_iterations,
-         Range::AtLeast(1), {"Ceres refinement: maximum iterations"});
+  s->Add("optimizer.refinement_iterations", &optimizer.refinement.max_iterations, Range::AtLeast(1),
+         {"Ceres refinement: maximum iterations"});
   s->Add("optimizer.refinement_huber", &optimizer.refinement.smoothness_huber,
-         Range::GreaterThan(0.0), {"Ceres refinement: Huber width of the smoothness term",
-                                   "label steps"});
+         Range::GreaterThan(0.0),
+         {"Ceres refinement: Huber width of the smoothness term", "label steps"});
   s->Add("optimizer.refinement_min_curvature", &optimizer.refinement.min_data_curvature,
          Range::GreaterThan(0.0), {"Ceres refinement: smallest curvature of the local data model"});
 
@@ -195,9 +202,9 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("mesh.max_depth_ratio", &mesh.meshing.max_depth_ratio, Range::Between(0.0, 10.0),
          {"drop a triangle whose largest/smallest vertex depth exceeds 1 + this (a depth "
           "discontinuity); 0 = off"});
-  s->Add("mesh.max_view_angle_deg", &mesh.meshing.max_view_angle_deg,
-         Range{0.0, 90.0, false, true},
-         {"drop a triangle seen more obliquely than this (normal vs viewing ray); 90 = off", "deg"});
+  s->Add(
+      "mesh.max_view_angle_deg", &mesh.meshing.max_view_angle_deg, Range{0.0, 90.0, false, true},
+      {"drop a triangle seen more obliquely than this (normal vs viewing ray); 90 = off", "deg"});
   s->Add("mesh.stride", &mesh.meshing.stride_px, Range::Between(1, 1024),
          {"one vertex every n pixels", "px"});
   s->Add("mesh.preview.mode", &mesh.preview.mode, {"color", "shaded", "color_shaded"},

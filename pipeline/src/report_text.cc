@@ -62,9 +62,8 @@ std::vector<std::pair<std::string, Table>> MetricsTables(const json& metrics) {
       t.push_back({name, Percent(s["bad3_percent"]), Percent(s["bad1_percent"]),
                    Number(s["mean_abs_error"], "%.3f"), std::to_string(s["counted"].get<long>())});
     }
-    tables.emplace_back("Held-out LiDAR points (" +
-                            metrics["lidar_holdout"].value("unit", std::string()) + ")",
-                        t);
+    tables.emplace_back(
+        "Held-out LiDAR points (" + metrics["lidar_holdout"].value("unit", std::string()) + ")", t);
   }
   return tables;
 }
@@ -73,10 +72,17 @@ std::string Escape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -87,8 +93,8 @@ std::string Escape(const std::string& s) {
 std::string TerminalSummary(const json& report) {
   std::ostringstream s;
   if (report.contains("gcps")) {
-    s << "GCPs: " << report["gcps"]["count"] << " (" << Number(report["gcps"]["density_percent"], "%.2f")
-      << " % of the pixels)\n";
+    s << "GCPs: " << report["gcps"]["count"] << " ("
+      << Number(report["gcps"]["density_percent"], "%.2f") << " % of the pixels)\n";
   }
   if (report.contains("metrics")) {
     for (const auto& [title, table] : MetricsTables(report["metrics"])) {
@@ -118,9 +124,9 @@ std::string MakeIndexHtml(const json& report, const std::vector<std::string>& im
        "figure{display:inline-block;margin:0.5em;vertical-align:top}"
        "img{max-width:720px;border:1px solid #ccc}</style></head><body>\n";
   h << "<h1>gcpstereo run</h1>\n<p>Configuration: <code>" << Escape(report.value("config", ""))
-    << "</code>; data set <code>" << Escape(report["dataset"].value("path", "")) << "</code>, reference <b>"
-    << Escape(report["dataset"]["reference"].value("name", "")) << "</b> ("
-    << report["dataset"]["reference"].value("width", 0) << "×"
+    << "</code>; data set <code>" << Escape(report["dataset"].value("path", ""))
+    << "</code>, reference <b>" << Escape(report["dataset"]["reference"].value("name", ""))
+    << "</b> (" << report["dataset"]["reference"].value("width", 0) << "×"
     << report["dataset"]["reference"].value("height", 0) << "), "
     << report["dataset"].value("num_views", 0) << " views.</p>\n";
   if (report.contains("metrics")) {
@@ -148,8 +154,8 @@ std::string MakeIndexHtml(const json& report, const std::vector<std::string>& im
   }
   h << "<h2>Pictures</h2>\n";
   for (const auto& image : images) {
-    h << "<figure><img src=\"" << Escape(image) << "\" alt=\"" << Escape(image)
-      << "\"><figcaption>" << Escape(image) << "</figcaption></figure>\n";
+    h << "<figure><img src=\"" << Escape(image) << "\" alt=\"" << Escape(image) << "\"><figcaption>"
+      << Escape(image) << "</figcaption></figure>\n";
   }
   h << "<p>Everything measured is in <a href=\"report.json\">report.json</a>; the configuration "
        "used in <a href=\"effective_config.yaml\">effective_config.yaml</a>.</p>\n</body></html>\n";

@@ -221,12 +221,12 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
       }
     }
     const gcp::GcpOutlierStats stats = gcp::ComputeOutlierStats(sparse, gt_labels, 1.0);
-    report["gcps"]["outliers"] = {{"definition", "|label - gt label| > 1 label step"},
-                                  {"evaluated", stats.num_evaluated},
-                                  {"outliers", stats.num_outliers},
-                                  {"percent", stats.outlier_percent},
-                                  {"within_3_sigma_percent",
-                                   with_sigma ? 100.0 * within_3_sigma / with_sigma : 0.0}};
+    report["gcps"]["outliers"] = {
+        {"definition", "|label - gt label| > 1 label step"},
+        {"evaluated", stats.num_evaluated},
+        {"outliers", stats.num_outliers},
+        {"percent", stats.outlier_percent},
+        {"within_3_sigma_percent", with_sigma ? 100.0 * within_3_sigma / with_sigma : 0.0}};
   }
   spdlog::info("labels: {} {} from {} to {} (range from {})", labels.count(),
                LabelSpaceKindName(labels.kind()), labels.min(), labels.max(), range_summary.source);
@@ -272,7 +272,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
       options.cost.method != "auto"
           ? options.cost.method
           : (dataset.rectified && dataset.neighbors.size() == 1 ? "birchfield_tomasi"
-                                                                 : "plane_sweep");
+                                                                : "plane_sweep");
   std::vector<double> pair_disparities;
   const View* pair_neighbor = nullptr;
   if (cost_method == "birchfield_tomasi") {
@@ -296,9 +296,9 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   auto make_problem = [&](const cv::Rect& region) {
     optimize::OwnedMrfProblem problem;
     if (cost_method == "birchfield_tomasi") {
-      problem.data = cost::ComputeBirchfieldTomasiCost(
-          reference.image, pair_neighbor->image, pair_disparities, region,
-          options.cost.birchfield_tomasi);
+      problem.data =
+          cost::ComputeBirchfieldTomasiCost(reference.image, pair_neighbor->image, pair_disparities,
+                                            region, options.cost.birchfield_tomasi);
     } else {
       problem.data = cost::ComputePlaneSweepCost(reference, dataset.neighbors, labels, region,
                                                  options.cost.plane_sweep);
@@ -340,27 +340,28 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   json tiles = json::array();
   for (const auto& tile : optimized.tiles) {
     const auto& e = tile.expansion;
-    tiles.push_back({{"region", {tile.region.x, tile.region.y, tile.region.width,
-                                 tile.region.height}},
-                     {"cost_seconds", tile.setup_seconds},
-                     {"expansion_seconds", e.time_seconds},
-                     {"initial_energy", e.initial_energy},
-                     {"energy_per_cycle", e.energy_per_cycle},
-                     {"energy", {{"data", e.breakdown.data},
-                                 {"smooth", e.breakdown.smooth},
-                                 {"gcp", e.breakdown.gcp},
-                                 {"total", e.breakdown.total()}}},
-                     {"cycles", e.cycles},
-                     {"converged", e.converged},
-                     {"moves_tried", e.moves_tried},
-                     {"moves_skipped", e.moves_skipped},
-                     {"refinement",
-                      {{"method", optimize::RefinementMethodName(tile.refinement.method)},
-                       {"pixels_moved", tile.refinement.pixels_moved},
-                       {"mean_abs_offset", tile.refinement.mean_abs_offset},
-                       {"iterations", tile.refinement.iterations},
-                       {"converged", tile.refinement.solver_converged},
-                       {"seconds", tile.refinement.time_seconds}}}});
+    tiles.push_back(
+        {{"region", {tile.region.x, tile.region.y, tile.region.width, tile.region.height}},
+         {"cost_seconds", tile.setup_seconds},
+         {"expansion_seconds", e.time_seconds},
+         {"initial_energy", e.initial_energy},
+         {"energy_per_cycle", e.energy_per_cycle},
+         {"energy",
+          {{"data", e.breakdown.data},
+           {"smooth", e.breakdown.smooth},
+           {"gcp", e.breakdown.gcp},
+           {"total", e.breakdown.total()}}},
+         {"cycles", e.cycles},
+         {"converged", e.converged},
+         {"moves_tried", e.moves_tried},
+         {"moves_skipped", e.moves_skipped},
+         {"refinement",
+          {{"method", optimize::RefinementMethodName(tile.refinement.method)},
+           {"pixels_moved", tile.refinement.pixels_moved},
+           {"mean_abs_offset", tile.refinement.mean_abs_offset},
+           {"iterations", tile.refinement.iterations},
+           {"converged", tile.refinement.solver_converged},
+           {"seconds", tile.refinement.time_seconds}}}});
   }
   optimize_clock.Done({{"method", options.optimizer.method},
                        {"cost_method", cost_method},
@@ -372,14 +373,14 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   const cv::Mat depth = internal::LabelMapToDepth(optimized.labels, labels);
   cv::Mat disparity;
   if (dataset.rectified) {
-    disparity = internal::LabelMapToDisparity(optimized.labels, labels, dataset.disparity_numerator);
+    disparity =
+        internal::LabelMapToDisparity(optimized.labels, labels, dataset.disparity_numerator);
   }
   cv::Mat prior_depth, prior_disparity;
   if (!prior.empty()) {
     prior_depth = internal::LabelMapToDepth(prior, labels);
     if (dataset.rectified) {
-      prior_disparity =
-          internal::LabelMapToDisparity(prior, labels, dataset.disparity_numerator);
+      prior_disparity = internal::LabelMapToDisparity(prior, labels, dataset.disparity_numerator);
     }
   }
 
@@ -392,7 +393,8 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     if (!prior_depth.empty()) inputs.depth_maps.emplace_back("propagated", prior_depth);
     if (dataset.rectified) {
       inputs.disparity_maps.emplace_back("result", disparity);
-      if (!prior_disparity.empty()) inputs.disparity_maps.emplace_back("propagated", prior_disparity);
+      if (!prior_disparity.empty())
+        inputs.disparity_maps.emplace_back("propagated", prior_disparity);
     }
     inputs.lidar_holdout = &gcp_stage.lidar_holdout;
     inputs.holdout_in_disparity = gcp_stage.holdout_in_disparity;
@@ -422,12 +424,11 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
       if (options.output.previews && !triangles.faces.empty()) {
         // Small images are rendered larger so that the picture stays legible.
         const double enlarge = std::max(1.0, 960.0 / reference.camera.width);
-        const Camera view = mesh::OrbitCamera(reference.camera.Rescaled(enlarge),
-                                              options.mesh.preview_yaw_deg,
-                                              options.mesh.preview_pitch_deg,
-                                              mesh::MedianVertex(triangles));
-        mesh_previews.emplace_back(
-            "mesh.png", mesh::RenderMeshPreview(triangles, view, options.mesh.preview));
+        const Camera view =
+            mesh::OrbitCamera(reference.camera.Rescaled(enlarge), options.mesh.preview_yaw_deg,
+                              options.mesh.preview_pitch_deg, mesh::MedianVertex(triangles));
+        mesh_previews.emplace_back("mesh.png",
+                                   mesh::RenderMeshPreview(triangles, view, options.mesh.preview));
       }
     }
     if (options.output.points) {

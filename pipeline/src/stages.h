@@ -27,11 +27,11 @@ struct RectifiedPair {
 RectifiedPair FindRectifiedPair(const Dataset& dataset, const std::string& purpose);
 
 struct GcpStageResult {
-  GcpSet gcps;                                        // merged and downsampled
-  nlohmann::json report;                              // per-source counts, density
-  std::vector<eval::ReferencePoint> lidar_holdout;    // disparity/depth reference values of the
-                                                      // held-out scan points (eval.lidar_holdout)
-  bool holdout_in_disparity = false;                  // values are disparities (rectified data)
+  GcpSet gcps;                                      // merged and downsampled
+  nlohmann::json report;                            // per-source counts, density
+  std::vector<eval::ReferencePoint> lidar_holdout;  // disparity/depth reference values of the
+                                                    // held-out scan points (eval.lidar_holdout)
+  bool holdout_in_disparity = false;                // values are disparities (rectified data)
 };
 // Builds the GCPs of every configured source. `provisional_labels` gives the disparity search
 // range of stereo GCPs.

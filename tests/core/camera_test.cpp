@@ -1,8 +1,8 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/core/camera.h"
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "gcpstereo/core/error.h"
 
@@ -70,7 +70,8 @@ TEST(Camera, ValidateRejectsBadCameras) {
         try {
           bad_focal.Validate("cam.camera");
         } catch (const Error& e) {
-          EXPECT_STREQ(e.what(), "cam.camera: focal lengths must be positive, got fx = -5, fy = 1010");
+          EXPECT_STREQ(e.what(),
+                       "cam.camera: focal lengths must be positive, got fx = -5, fy = 1010");
           throw;
         }
       },

@@ -24,8 +24,8 @@ struct Result {
 
 // Runs `args` through the shell; captures stderr (and stdout when `with_stdout`).
 Result RunCli(const std::string& args, bool with_stdout = false) {
-  const std::string command = std::string(GCPSTEREO_EXECUTABLE) + " " + args +
-                              (with_stdout ? " 2>&1" : " 2>&1 >/dev/null");
+  const std::string command =
+      std::string(GCPSTEREO_EXECUTABLE) + " " + args + (with_stdout ? " 2>&1" : " 2>&1 >/dev/null");
   Result r;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return r;
@@ -88,11 +88,11 @@ TEST(Cli, MissingDatasetFailsWithoutOutputs) {
 TEST(Cli, KeysListsContractKeys) {
   const Result r = RunCli("keys", true);
   EXPECT_EQ(r.status, 0);
-  for (const char* key : {"dataset.format", "dataset.path", "dataset.reference", "dataset.neighbors",
-                          "dataset.scale", "labels.space", "labels.count", "labels.min",
-                          "labels.max", "gcp.sources", "gcp.lidar.path", "gcp.depth_map.path",
-                          "gcp.depth_map.kind", "gcp.depth_map.scale", "gcp.downsample",
-                          "optimizer.tiles", "optimizer.tile_overlap"}) {
+  for (const char* key :
+       {"dataset.format", "dataset.path", "dataset.reference", "dataset.neighbors", "dataset.scale",
+        "labels.space", "labels.count", "labels.min", "labels.max", "gcp.sources", "gcp.lidar.path",
+        "gcp.depth_map.path", "gcp.depth_map.kind", "gcp.depth_map.scale", "gcp.downsample",
+        "optimizer.tiles", "optimizer.tile_overlap"}) {
     EXPECT_NE(r.output.find(std::string("  ") + key + "  ("), std::string::npos) << key;
   }
 }

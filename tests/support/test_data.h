@@ -21,10 +21,10 @@ std::string MakeTempDir(const std::string& prefix);
 
 // Skips the current test with a clear message when ../shared/data/<relative> is absent; otherwise
 // stores its path in `var`.
-#define GCPSTEREO_REQUIRE_SHARED_DATA(var, relative)                                         \
-  const std::string var = ::gcpstereo::testing::SharedDataPath(relative);                   \
-  if (var.empty()) {                                                                         \
-    GTEST_SKIP() << "real data '" << (relative)                                             \
-                 << "' not found (set GCPSTEREO_DATA or place ../shared/data beside the "    \
-                    "checkout); skipping";                                                   \
+#define GCPSTEREO_REQUIRE_SHARED_DATA(var, relative)                                      \
+  const std::string var = ::gcpstereo::testing::SharedDataPath(relative);                 \
+  if (var.empty()) {                                                                      \
+    GTEST_SKIP() << "real data '" << (relative)                                           \
+                 << "' not found (set GCPSTEREO_DATA or place ../shared/data beside the " \
+                    "checkout); skipping";                                                \
   }

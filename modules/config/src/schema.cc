@@ -39,7 +39,8 @@ size_t EditDistance(const std::string& a, const std::string& b) {
   for (size_t i = 1; i <= a.size(); ++i) {
     cur[0] = i;
     for (size_t j = 1; j <= b.size(); ++j) {
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      cur[j] =
+          std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
     }
     std::swap(prev, cur);
   }
@@ -87,13 +88,22 @@ struct Schema::Entry {
 
   std::string TypeName() const {
     switch (target.index()) {
-      case 0: return "number";
-      case 1: return "integer";
-      case 2: return "bool";
-      case 3: return choices.empty() ? "string" : "one of {" + Join(choices, ", ") + "}";
-      case 4: return "list of " + (choices.empty() ? std::string("strings") : "{" + Join(choices, ", ") + "}");
-      case 5: return fixed_size ? "list of " + std::to_string(fixed_size) + " integers" : "list of integers";
-      case 6: return "number or auto";
+      case 0:
+        return "number";
+      case 1:
+        return "integer";
+      case 2:
+        return "bool";
+      case 3:
+        return choices.empty() ? "string" : "one of {" + Join(choices, ", ") + "}";
+      case 4:
+        return "list of " +
+               (choices.empty() ? std::string("strings") : "{" + Join(choices, ", ") + "}");
+      case 5:
+        return fixed_size ? "list of " + std::to_string(fixed_size) + " integers"
+                          : "list of integers";
+      case 6:
+        return "number or auto";
     }
     return "?";
   }
@@ -131,12 +141,12 @@ void Schema::Register(std::unique_ptr<Entry> entry) {
   entries_.push_back(std::move(entry));
 }
 
-#define GCPSTEREO_ADD_ENTRY(...)               \
-  auto e = std::make_unique<Entry>();          \
-  e->key = key;                                \
-  e->target = field;                           \
-  e->doc = std::move(doc);                     \
-  __VA_ARGS__;                                 \
+#define GCPSTEREO_ADD_ENTRY(...)      \
+  auto e = std::make_unique<Entry>(); \
+  e->key = key;                       \
+  e->target = field;                  \
+  e->doc = std::move(doc);            \
+  __VA_ARGS__;                        \
   Register(std::move(e));
 
 void Schema::Add(const std::string& key, double* field, Range range, KeyDoc doc) {
@@ -320,8 +330,8 @@ void Schema::LoadString(const std::string& yaml_text, const std::string& source)
   try {
     root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
-    throw ConfigError(source + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " +
-                      e.msg);
+    throw ConfigError(source + ":" + std::to_string(e.mark.line + 1) +
+                      ": YAML syntax error: " + e.msg);
   }
   if (root.IsNull()) return;  // an empty file keeps every default
   if (!root.IsMap()) throw ConfigError(source + ": the configuration must be a mapping of keys");

@@ -31,13 +31,16 @@ LabelSpaceKind ParseLabelSpaceKind(const std::string& name) {
 LabelSpace::LabelSpace(LabelSpaceKind kind, int count, double min, double max,
                        double disparity_numerator)
     : kind_(kind), count_(count), min_(min), max_(max), disparity_numerator_(disparity_numerator) {
-  if (count < 2) throw ConfigError(ViolatedConstraint("labels.count", FormatNumber(count), "count >= 2"));
+  if (count < 2)
+    throw ConfigError(ViolatedConstraint("labels.count", FormatNumber(count), "count >= 2"));
   if (!std::isfinite(min) || !std::isfinite(max) || !(min < max)) {
-    throw ConfigError(ViolatedConstraint("labels.min, labels.max", FormatNumber(min) + ", " + FormatNumber(max),
+    throw ConfigError(ViolatedConstraint("labels.min, labels.max",
+                                         FormatNumber(min) + ", " + FormatNumber(max),
                                          "finite and min < max"));
   }
   if (kind == LabelSpaceKind::kDepth && !(min > 0.0)) {
-    throw ConfigError(ViolatedConstraint("labels.min", FormatNumber(min), "min > 0 for depth labels"));
+    throw ConfigError(
+        ViolatedConstraint("labels.min", FormatNumber(min), "min > 0 for depth labels"));
   }
   if (kind != LabelSpaceKind::kDepth && min < 0.0) {
     throw ConfigError(ViolatedConstraint("labels.min", FormatNumber(min), "min >= 0"));

@@ -50,8 +50,8 @@ void InstallConsoleLogger() {
 void SetLogLevel(const std::string& level) {
   const spdlog::level::level_enum parsed = spdlog::level::from_str(level);
   if (parsed == spdlog::level::off && level != "off") {
-    throw ConfigError(ViolatedConstraint("log level", level,
-                                         "one of trace, debug, info, warn, error, off"));
+    throw ConfigError(
+        ViolatedConstraint("log level", level, "one of trace, debug, info, warn, error, off"));
   }
   spdlog::set_level(parsed);
 }

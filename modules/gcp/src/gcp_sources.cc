@@ -33,8 +33,8 @@ void LidarGcpOptions::Check() const {
                                          "depth_tolerance >= 0"));
   }
   if (!(sigma_multiplier >= 0.0) || !std::isfinite(sigma_multiplier)) {
-    throw ConfigError(ViolatedConstraint("gcp.lidar.sigma_multiplier", FormatNumber(sigma_multiplier),
-                                         "sigma_multiplier >= 0"));
+    throw ConfigError(ViolatedConstraint("gcp.lidar.sigma_multiplier",
+                                         FormatNumber(sigma_multiplier), "sigma_multiplier >= 0"));
   }
   if (!(default_sigma >= 0.0) || !std::isfinite(default_sigma)) {
     throw ConfigError(ViolatedConstraint("gcp.lidar.default_sigma", FormatNumber(default_sigma),

@@ -38,8 +38,9 @@ struct WtaMaps {
 cv::Mat WtaBirchfieldTomasi(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax) {
   std::vector<double> disparities;
   for (int d = dmin; d <= dmax; ++d) disparities.push_back(d);
-  const CostVolume volume = cost::ComputeBirchfieldTomasiCost(
-      ref, target, disparities, cv::Rect(0, 0, ref.cols, ref.rows), cost::BirchfieldTomasiOptions{});
+  const CostVolume volume = cost::ComputeBirchfieldTomasiCost(ref, target, disparities,
+                                                              cv::Rect(0, 0, ref.cols, ref.rows),
+                                                              cost::BirchfieldTomasiOptions{});
   cv::Mat wta = cost::WinnerTakeAll(volume);
   // Labels index `disparities`: shift to disparities, keeping −1 (no valid disparity).
   for (int y = 0; y < wta.rows; ++y) {
@@ -283,7 +284,8 @@ void StereoGcpOptions::Check() const {
   }
   if (!(aw_gamma_c > 0.0)) fail("aw_gamma_c", FormatNumber(aw_gamma_c), "aw_gamma_c > 0");
   if (!(aw_gamma_p > 0.0)) fail("aw_gamma_p", FormatNumber(aw_gamma_p), "aw_gamma_p > 0");
-  if (!(aw_truncation > 0.0)) fail("aw_truncation", FormatNumber(aw_truncation), "aw_truncation > 0");
+  if (!(aw_truncation > 0.0))
+    fail("aw_truncation", FormatNumber(aw_truncation), "aw_truncation > 0");
   if (!(sigma_px >= 0.0)) fail("sigma_px", FormatNumber(sigma_px), "sigma_px >= 0");
 }
 

@@ -237,7 +237,8 @@ void SynthOptions::Check() const {
     fail("synth.preset", "'" + preset + "'", "one of tiny, small, fountain");
   }
   if (!(image_noise_sigma >= 0.0 && image_noise_sigma <= 20.0)) {
-    fail("synth.image_noise_sigma", FormatNumber(image_noise_sigma), "0 <= image_noise_sigma <= 20");
+    fail("synth.image_noise_sigma", FormatNumber(image_noise_sigma),
+         "0 <= image_noise_sigma <= 20");
   }
   if (!(exposure_gain_variation >= 0.0 && exposure_gain_variation <= 0.5)) {
     fail("synth.exposure_gain_variation", FormatNumber(exposure_gain_variation),
@@ -255,7 +256,8 @@ void SynthOptions::Check() const {
          "0 <= laser_sigma_constant_m <= 1");
   }
   if (!(laser_sigma_per_m >= 0.0 && laser_sigma_per_m <= 0.1)) {
-    fail("synth.laser_sigma_per_m", FormatNumber(laser_sigma_per_m), "0 <= laser_sigma_per_m <= 0.1");
+    fail("synth.laser_sigma_per_m", FormatNumber(laser_sigma_per_m),
+         "0 <= laser_sigma_per_m <= 0.1");
   }
   if (!(laser_max_incidence_deg > 0.0 && laser_max_incidence_deg <= 90.0)) {
     fail("synth.laser_max_incidence_deg", FormatNumber(laser_max_incidence_deg),
@@ -266,7 +268,8 @@ void SynthOptions::Check() const {
          "0 <= laser_angular_step_rad <= 0.1");
   }
   if (!(laser_max_range_m > 0.0 && laser_max_range_m <= 1000.0)) {
-    fail("synth.laser_max_range_m", FormatNumber(laser_max_range_m), "0 < laser_max_range_m <= 1000");
+    fail("synth.laser_max_range_m", FormatNumber(laser_max_range_m),
+         "0 < laser_max_range_m <= 1000");
   }
 }
 

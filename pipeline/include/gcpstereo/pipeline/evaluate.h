@@ -14,12 +14,12 @@ struct EvalRequest {
   std::string disparity;   // a disparity map (PFM)
 
   // Strecha-style: depth ± sigma per pixel, or a mesh / point cloud rendered into `camera`.
-  std::string gt_depth;     // PFM
-  std::string gt_sigma;     // PFM of per-pixel sigma; or use `sigma`
-  double sigma = 0.0;       // constant laser sigma when no gt_sigma map (data set unit)
-  std::string gt_mesh;      // PLY mesh of the true surface (world coordinates)
-  std::string gt_points;    // PLY/PCD point cloud of the true surface (world coordinates)
-  std::string camera;       // Strecha .camera of the depth map's view (for gt_mesh / gt_points)
+  std::string gt_depth;   // PFM
+  std::string gt_sigma;   // PFM of per-pixel sigma; or use `sigma`
+  double sigma = 0.0;     // constant laser sigma when no gt_sigma map (data set unit)
+  std::string gt_mesh;    // PLY mesh of the true surface (world coordinates)
+  std::string gt_points;  // PLY/PCD point cloud of the true surface (world coordinates)
+  std::string camera;     // Strecha .camera of the depth map's view (for gt_mesh / gt_points)
 
   // Middlebury-style.
   std::string gt_disparity;        // PFM, or 8/16-bit PNG/PGM divided by gt_scale (0 = unknown)

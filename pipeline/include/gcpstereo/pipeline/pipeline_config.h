@@ -23,18 +23,18 @@ namespace gcpstereo::pipeline {
 
 // Keys of the `dataset:` section (../shared/CONTRACT.md).
 struct DatasetOptions {
-  std::string format = "strecha";        // strecha | middlebury | kitti_raw
-  std::string path;                      // the data set's folder (required)
-  std::string reference;                 // reference view name (required)
-  std::vector<std::string> neighbors;    // views used for matching; empty = all others
-  double scale = 1.0;                    // image scale before processing, (0, 1]
+  std::string format = "strecha";      // strecha | middlebury | kitti_raw
+  std::string path;                    // the data set's folder (required)
+  std::string reference;               // reference view name (required)
+  std::vector<std::string> neighbors;  // views used for matching; empty = all others
+  double scale = 1.0;                  // image scale before processing, (0, 1]
 };
 
 // Keys of the `labels:` section.
 struct LabelOptions {
-  std::string space = "depth";   // depth | inverse_depth | disparity
-  int count = 360;               // number of discrete hypotheses (the paper: 360 depth levels)
-  std::optional<double> min;     // in the space's unit; absent = automatic
+  std::string space = "depth";  // depth | inverse_depth | disparity
+  int count = 360;              // number of discrete hypotheses (the paper: 360 depth levels)
+  std::optional<double> min;    // in the space's unit; absent = automatic
   std::optional<double> max;
 };
 
@@ -71,10 +71,10 @@ struct OptimizerOptions {
   optimize::EnergyOptions energy;
   optimize::ExpansionOptions expansion;
   optimize::RefinementOptions refinement;
-  std::string candidate_labels = "local";  // all | local
-  std::string initialization = "wta";      // wta | prior
-  std::string refinement_method = "ceres"; // none | parabola | ceres
-  std::string blend = "mean";              // mean | feather
+  std::string candidate_labels = "local";   // all | local
+  std::string initialization = "wta";       // wta | prior
+  std::string refinement_method = "ceres";  // none | parabola | ceres
+  std::string blend = "mean";               // mean | feather
 };
 
 // Keys of the `optimizer:` section that the pipeline itself reads.
@@ -84,7 +84,7 @@ struct TilingOptions {
 };
 
 struct RuntimeOptions {
-  int threads = 0;              // worker threads; 0 = all cores
+  int threads = 0;  // worker threads; 0 = all cores
   std::string log_level = "info";
   std::string stop_after = "all";  // load | gcps | propagation | all
 };
@@ -107,7 +107,7 @@ struct OutputOptions {
 struct MeshOptions {
   mesh::MeshingOptions meshing;
   mesh::MeshRenderOptions preview;
-  double preview_yaw_deg = 30.0;    // viewpoint of mesh.png, rotated about the median vertex
+  double preview_yaw_deg = 30.0;  // viewpoint of mesh.png, rotated about the median vertex
   double preview_pitch_deg = 15.0;
 };
 

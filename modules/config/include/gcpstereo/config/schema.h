@@ -19,7 +19,9 @@ struct Range {
 
   static Range Any() { return {}; }
   // Finite values >= v (or > v); infinity is excluded.
-  static Range AtLeast(double v) { return {v, std::numeric_limits<double>::infinity(), true, false}; }
+  static Range AtLeast(double v) {
+    return {v, std::numeric_limits<double>::infinity(), true, false};
+  }
   static Range GreaterThan(double v) {
     return {v, std::numeric_limits<double>::infinity(), false, false};
   }
@@ -61,10 +63,11 @@ class Schema {
   void Add(const std::string& key, int* field, Range range, KeyDoc doc);
   void Add(const std::string& key, bool* field, KeyDoc doc);
   // `choices` empty = any string (e.g. a path).
-  void Add(const std::string& key, std::string* field, std::vector<std::string> choices, KeyDoc doc);
-  // A list of strings, each one of `choices` (or any when empty).
-  void Add(const std::string& key, std::vector<std::string>* field, std::vector<std::string> choices,
+  void Add(const std::string& key, std::string* field, std::vector<std::string> choices,
            KeyDoc doc);
+  // A list of strings, each one of `choices` (or any when empty).
+  void Add(const std::string& key, std::vector<std::string>* field,
+           std::vector<std::string> choices, KeyDoc doc);
   // A list of integers; `fixed_size` > 0 requires exactly that many elements.
   void Add(const std::string& key, std::vector<int>* field, std::size_t fixed_size, Range range,
            KeyDoc doc);

@@ -34,7 +34,8 @@ struct Camera {
   // The world point at `depth` (camera z) seen through `pixel`.
   Eigen::Vector3d BackProject(const Eigen::Vector2d& pixel, double depth) const;
 
-  // True when the pixel lies inside the image (pixel centres 0 … width−1, with half a pixel margin).
+  // True when the pixel lies inside the image (pixel centres 0 … width−1, with half a pixel
+  // margin).
   bool InImage(const Eigen::Vector2d& pixel) const {
     return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < width - 0.5 &&
            pixel.y() < height - 0.5;
@@ -48,14 +49,15 @@ struct Camera {
   Camera Rescaled(double scale) const;
 
   // Throws Error(context + ": ...") unless K has positive focal lengths and finite entries,
-  // the rotation is orthonormal with det +1 within 1e-3, the centre is finite and the size positive.
+  // the rotation is orthonormal with det +1 within 1e-3, the centre is finite and the size
+  // positive.
   void Validate(const std::string& context) const;
 };
 
 // The camera of view `index` of a rectified sequence whose views are equally spaced along x:
-// identity rotation, centre (index · baseline_per_view, 0, 0). With focal length f (pixels), a point
-// at depth z then has disparity f · baseline_per_view / z per view step, so Middlebury sequences run
-// through the same plane-sweep code as calibrated Strecha views.
+// identity rotation, centre (index · baseline_per_view, 0, 0). With focal length f (pixels), a
+// point at depth z then has disparity f · baseline_per_view / z per view step, so Middlebury
+// sequences run through the same plane-sweep code as calibrated Strecha views.
 Camera RectifiedSequenceCamera(double focal_px, double cx, double cy, double baseline_per_view,
                                int index, int width, int height);
 

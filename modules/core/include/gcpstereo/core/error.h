@@ -14,7 +14,8 @@ class Error : public std::runtime_error {
   explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
 
-// A file could not be read or written, or its content is malformed. The message starts with the path.
+// A file could not be read or written, or its content is malformed. The message starts with the
+// path.
 class IoError : public Error {
  public:
   IoError(const std::string& path, const std::string& problem)

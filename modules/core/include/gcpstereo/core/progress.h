@@ -19,7 +19,8 @@ void SetProgressBarsEnabled(bool enabled);
 bool ProgressBarsEnabled();
 
 // A terminal progress bar on stderr for a long loop of `total` steps. It draws only when progress
-// bars are enabled and stderr is a terminal, at most a few times a second; Advance() is thread-safe.
+// bars are enabled and stderr is a terminal, at most a few times a second; Advance() is
+// thread-safe.
 class ProgressBar {
  public:
   ProgressBar(std::string label, std::int64_t total);

@@ -28,14 +28,14 @@ struct View {
 
 // Ground truth that a data set may carry for its reference view. Empty Mats mean "not available".
 struct GroundTruth {
-  cv::Mat depth;         // CV_32F, depth along the reference camera's z; kInvalidDepth = unknown
-  cv::Mat sigma;         // CV_32F, per-pixel standard deviation of `depth` (laser sigma)
-  cv::Mat disparity;     // CV_32F, rectified data: disparity in the data set's GT convention;
-                         // kInvalidDepth = unknown
+  cv::Mat depth;            // CV_32F, depth along the reference camera's z; kInvalidDepth = unknown
+  cv::Mat sigma;            // CV_32F, per-pixel standard deviation of `depth` (laser sigma)
+  cv::Mat disparity;        // CV_32F, rectified data: disparity in the data set's GT convention;
+                            // kInvalidDepth = unknown
   cv::Mat disparity_right;  // CV_32F, the right view's GT disparity where the set has one
-  cv::Mat mask_nonocc;   // CV_8U, 255 = counted (Middlebury v2 masks where available)
-  cv::Mat mask_all;      // CV_8U, 255 = counted
-  cv::Mat mask_disc;     // CV_8U, 255 = near a discontinuity, 128 = other non-occluded, 0 = excluded
+  cv::Mat mask_nonocc;      // CV_8U, 255 = counted (Middlebury v2 masks where available)
+  cv::Mat mask_all;         // CV_8U, 255 = counted
+  cv::Mat mask_disc;  // CV_8U, 255 = near a discontinuity, 128 = other non-occluded, 0 = excluded
 
   bool HasDepth() const { return !depth.empty(); }
   bool HasDisparity() const { return !disparity.empty(); }
