@@ -150,7 +150,7 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("optimizer.epsilon", &optimizer.energy.epsilon, Range::Between(0.0, 1.0),
          {"lower bound of the smoothness weights, eq. 4 (paper: 0.3)", "", "ε"});
   s->Add("optimizer.lambda_r", &optimizer.energy.lambda_r, Range::AtLeast(0.0),
-         {"weight of the GCP energy, eq. 8 (paper: 8; measured best relative to the data term: 4)",
+         {"weight of the GCP energy, eq. 8 (paper: 8)",
           "", "λr"});
   s->Add("optimizer.gamma_d", &optimizer.energy.gamma_d, Range::GreaterThan(0.0),
          {"sharpness of the robust GCP penalty, eq. 7 (paper: 2)", "label steps", "γd"});

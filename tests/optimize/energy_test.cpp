@@ -11,17 +11,15 @@
 namespace gcpstereo::optimize {
 namespace {
 
-TEST(EnergyOptions, DefaultsAreTheDocumentedOnes) {
-  // The paper's T, γc, ε, γd; λs = 2 × 20 (its double sum over pairs), λr and η measured
-  // (energy.h).
+TEST(EnergyOptions, DefaultsAreThePapers) {
   const EnergyOptions options;
-  EXPECT_EQ(options.lambda_s, 40.0);
+  EXPECT_EQ(options.lambda_s, 20.0);
   EXPECT_EQ(options.truncation, 2.0);
   EXPECT_EQ(options.gamma_c, 3.6);
   EXPECT_EQ(options.epsilon, 0.3);
-  EXPECT_EQ(options.lambda_r, 4.0);
+  EXPECT_EQ(options.lambda_r, 8.0);
   EXPECT_EQ(options.gamma_d, 2.0);
-  EXPECT_EQ(options.eta, 0.5);
+  EXPECT_EQ(options.eta, 0.1);
   EXPECT_NO_THROW(options.Check());
 }
 
