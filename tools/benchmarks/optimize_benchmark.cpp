@@ -263,24 +263,26 @@ void CandidateSweep(const std::string& scene, const MrfProblem& problem,
   }
 }
 
+// Two-view Middlebury pairs of the real-data reports (paths under ../shared/data/middlebury).
+struct MiddleburyScene {
+  const char* name;
+  const char* left;
+  const char* right;
+  const char* gt;
+  double gt_scale;
+  int labels;
+};
+const MiddleburyScene kMiddleburyScenes[] = {
+    {"tsukuba", "tsukuba/scene1.row3.col3.ppm", "tsukuba/scene1.row3.col4.ppm",
+     "tsukuba/truedisp.row3.col3.pgm", 16.0, 16},
+    {"venus", "venus/im2.ppm", "venus/im6.ppm", "venus/disp2.pgm", 8.0, 20},
+    {"Aloe", "Aloe/view1.png", "Aloe/view5.png", "Aloe/disp1.png", 3.0, 80},
+    {"Rocks1", "Rocks1/view1.png", "Rocks1/view5.png", "Rocks1/disp1.png", 3.0, 80},
+};
+
 int RunGapReportMiddlebury() {
   const std::string data = SharedData() + "/middlebury/";
-  struct Scene {
-    const char* name;
-    const char* left;
-    const char* right;
-    const char* gt;
-    double gt_scale;
-    int labels;
-  };
-  const Scene scenes[] = {
-      {"tsukuba", "tsukuba/scene1.row3.col3.ppm", "tsukuba/scene1.row3.col4.ppm",
-       "tsukuba/truedisp.row3.col3.pgm", 16.0, 16},
-      {"venus", "venus/im2.ppm", "venus/im6.ppm", "venus/disp2.pgm", 8.0, 20},
-      {"Aloe", "Aloe/view1.png", "Aloe/view5.png", "Aloe/disp1.png", 3.0, 80},
-      {"Rocks1", "Rocks1/view1.png", "Rocks1/view5.png", "Rocks1/disp1.png", 3.0, 80},
-  };
-  for (const Scene& scene : scenes) {
+  for (const MiddleburyScene& scene : kMiddleburyScenes) {
     OwnedMrfProblem p;
     if (!LoadMiddlebury(data + scene.left, data + scene.right, scene.labels, &p)) {
       std::printf("\n%s not found under %s: skipped\n", scene.name, data.c_str());
@@ -349,20 +351,9 @@ int RunEtaReport() {
 // with |D − GT| > 1.
 int RunEtaReportMiddlebury() {
   const std::string data = SharedData() + "/middlebury/";
-  struct Scene {
-    const char* name;
-    const char* left;
-    const char* right;
-    const char* gt;
-    double gt_scale;
-    int labels;
-  };
-  const Scene scenes[] = {
-      {"tsukuba", "tsukuba/scene1.row3.col3.ppm", "tsukuba/scene1.row3.col4.ppm",
-       "tsukuba/truedisp.row3.col3.pgm", 16.0, 16},
-      {"venus", "venus/im2.ppm", "venus/im6.ppm", "venus/disp2.pgm", 8.0, 20},
-  };
-  for (const Scene& scene : scenes) {
+  // tsukuba and venus: the scenes with official non-occlusion masks.
+  for (const MiddleburyScene& scene :
+       std::vector<MiddleburyScene>(kMiddleburyScenes, kMiddleburyScenes + 2)) {
     OwnedMrfProblem p;
     if (!LoadMiddlebury(data + scene.left, data + scene.right, scene.labels, &p)) {
       std::printf("%s not found: skipped\n", scene.name);
