@@ -11,6 +11,42 @@ namespace gcpstereo::pipeline::internal {
 
 using nlohmann::json;
 
+namespace {
+
+// The scored held-out points on the darkened reference image, coloured by the error of `map` at
+// their nearest pixel: green |e| <= 1, yellow 1 < |e| and not bad-3, red bad-3 (> 3 and > 5 %),
+// magenta no estimate. Same definitions as eval::EvaluateAgainstPoints' defaults.
+cv::Mat RenderHoldoutErrors(const cv::Mat& image_bgr, const cv::Mat& map,
+                            const std::vector<eval::ReferencePoint>& points) {
+  cv::Mat grey, out;
+  cv::cvtColor(image_bgr, grey, cv::COLOR_BGR2GRAY);
+  grey.convertTo(grey, CV_8U, 0.6);
+  cv::cvtColor(grey, out, cv::COLOR_GRAY2BGR);
+  const int radius = std::max(1, image_bgr.cols / 600);
+  const eval::LidarScoreOptions bad;
+  for (const eval::ReferencePoint& p : points) {
+    const int c = static_cast<int>(std::floor(p.pixel.x() + 0.5));
+    const int r = static_cast<int>(std::floor(p.pixel.y() + 0.5));
+    if (c < 0 || r < 0 || c >= map.cols || r >= map.rows) continue;
+    const float v = map.at<float>(r, c);
+    cv::Scalar color(255, 0, 255);  // magenta: no estimate
+    if (std::isfinite(v) && v > 0) {
+      const double e = std::abs(v - p.value);
+      if (e > bad.bad_abs_px && e > bad.bad_rel * std::abs(p.value)) {
+        color = cv::Scalar(0, 0, 255);
+      } else if (e > bad.bad1_abs_px) {
+        color = cv::Scalar(0, 220, 255);
+      } else {
+        color = cv::Scalar(0, 200, 0);
+      }
+    }
+    cv::circle(out, cv::Point(c, r), radius, color, cv::FILLED);
+  }
+  return out;
+}
+
+}  // namespace
+
 json Evaluate(const Dataset& dataset, const EvaluationInputs& inputs,
               std::vector<std::pair<std::string, cv::Mat>>* previews) {
   json metrics = json::object();
@@ -62,8 +98,17 @@ json Evaluate(const Dataset& dataset, const EvaluationInputs& inputs,
     const auto& maps = inputs.holdout_in_disparity ? inputs.disparity_maps : inputs.depth_maps;
     json& out = metrics["lidar_holdout"];
     out["unit"] = inputs.holdout_in_disparity ? "disparity px" : "depth";
+    out["split"] =
+        "checkerboard of eval.holdout_block_px blocks: half of the scan feeds the GCPs, "
+        "the other half is scored";
+    out["not_visible_not_scored"] = inputs.holdout_not_visible;
     for (const auto& [name, map] : maps) {
       out[name] = eval::EvaluateAgainstPoints(map, *inputs.lidar_holdout).ToJson();
+    }
+    if (!maps.empty()) {
+      previews->emplace_back(
+          "error_holdout.png",
+          RenderHoldoutErrors(dataset.reference.image, maps.front().second, *inputs.lidar_holdout));
     }
   }
   return metrics;

@@ -122,17 +122,33 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
           if (!cloud.sigma.empty()) gcp_part.sigma.push_back(cloud.sigma[k]);
         }
         result.holdout_in_disparity = dataset.rectified;
+        // A scored point must be ground truth for the camera's depth map: it has to pass the same
+        // visibility test as a GCP (z-buffer + depth consistency) against the FULL scan. Points
+        // the scanner saw but the camera does not (behind a nearer surface, seen from the
+        // scanner's other viewpoint) are not scored; their count goes into the report.
+        const GcpSet visible = gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference,
+                                                       config.gcp.lidar);
+        cv::Mat visible_depth(height, width, CV_64F, cv::Scalar(0.0));
+        for (const Gcp& g : visible.points) visible_depth.at<double>(g.row, g.col) = g.depth;
         for (int i : split.score_indices) {
           const auto& p = projected[i];
           if (p.pixel.x() < -0.5 || p.pixel.y() < -0.5 || p.pixel.x() >= width - 0.5 ||
               p.pixel.y() >= height - 0.5) {
             continue;
           }
+          const int c = static_cast<int>(std::floor(p.pixel.x() + 0.5));
+          const int r = static_cast<int>(std::floor(p.pixel.y() + 0.5));
+          if (std::abs(visible_depth.at<double>(r, c) - p.depth) > 1e-6 * p.depth) {
+            ++result.lidar_holdout_not_visible;
+            continue;
+          }
           const double value = dataset.rectified ? dataset.disparity_numerator / p.depth : p.depth;
           result.lidar_holdout.push_back({p.pixel, value});
         }
-        spdlog::info("LiDAR hold-out: {} points as GCP candidates, {} points for scoring",
-                     gcp_part.size(), result.lidar_holdout.size());
+        spdlog::info(
+            "LiDAR hold-out: {} points as GCP candidates, {} points for scoring ({} held-out "
+            "points not visible from the camera are not scored)",
+            gcp_part.size(), result.lidar_holdout.size(), result.lidar_holdout_not_visible);
         cloud = std::move(gcp_part);
       }
       sets.push_back(gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference,

@@ -398,6 +398,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     }
     inputs.lidar_holdout = &gcp_stage.lidar_holdout;
     inputs.holdout_in_disparity = gcp_stage.holdout_in_disparity;
+    inputs.holdout_not_visible = gcp_stage.lidar_holdout_not_visible;
     report["metrics"] = internal::Evaluate(dataset, inputs, &previews);
     clock.Done();
   }

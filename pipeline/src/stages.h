@@ -32,6 +32,7 @@ struct GcpStageResult {
   std::vector<eval::ReferencePoint> lidar_holdout;  // disparity/depth reference values of the
                                                     // held-out scan points (eval.lidar_holdout)
   bool holdout_in_disparity = false;                // values are disparities (rectified data)
+  int lidar_holdout_not_visible = 0;  // held-out points failing the visibility test: not scored
 };
 // Builds the GCPs of every configured source. `provisional_labels` gives the disparity search
 // range of stereo GCPs.
@@ -54,7 +55,8 @@ struct EvaluationInputs {
   std::vector<std::pair<std::string, cv::Mat>> disparity_maps;  // rectified data; same order
   const std::vector<eval::ReferencePoint>* lidar_holdout = nullptr;
   bool holdout_in_disparity = false;
-  int border_px = 0;  // ignored border of masks derived from a left-right check
+  int holdout_not_visible = 0;  // held-out scan points not scored (not visible from the camera)
+  int border_px = 0;            // ignored border of masks derived from a left-right check
 };
 nlohmann::json Evaluate(const Dataset& dataset, const EvaluationInputs& inputs,
                         std::vector<std::pair<std::string, cv::Mat>>* previews);

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -94,6 +95,28 @@ TEST_F(TinyScene, GcpEnergyBringsDepthCloserToTheTruth) {
   EXPECT_LT(w["mean_abs_error"].get<double>(), wo["mean_abs_error"].get<double>());
   EXPECT_GT(w["within_n_sigma_percent"][2].get<double>(),
             wo["within_n_sigma_percent"][2].get<double>());
+}
+
+// eval.lidar_holdout: half of the simulated scan feeds the GCPs, the other half is scored; scan
+// points the camera cannot see (the scanner stands 0.4 m beside it) are not scored but counted.
+TEST_F(TinyScene, LidarHoldoutScoresOnlyVisiblePoints) {
+  const nlohmann::json report =
+      Run({"eval.lidar_holdout=true", "eval.holdout_block_px=4", "gcp.downsample=1"}, "holdout");
+  const auto& holdout = report["metrics"]["lidar_holdout"];
+  ASSERT_TRUE(holdout.contains("result")) << holdout.dump();
+  const int counted = holdout["result"]["counted"].get<int>();
+  const int not_visible = holdout["not_visible_not_scored"].get<int>();
+  std::cout << "[ measured ] tiny hold-out: " << counted << " points scored, " << not_visible
+            << " not visible, mean |error| " << holdout["result"]["mean_abs_error"] << " m\n";
+  EXPECT_GT(counted, 500);
+  EXPECT_GT(not_visible, 0);
+  EXPECT_LT(not_visible, counted / 4);
+  EXPECT_EQ(holdout["unit"].get<std::string>(), "depth");
+  // The scored half never fed the GCPs: the GCPs are at most the other half of the scan.
+  EXPECT_LT(report["gcps"]["count"].get<int>(), counted + not_visible + 50);
+  // Depth along z in metres; the tiny scene spans ≈ 5–12 m over 48 labels.
+  EXPECT_LT(holdout["result"]["mean_abs_error"].get<double>(), 0.5);
+  EXPECT_TRUE(fs::exists(fs::path(*dir_) / "holdout" / "error_holdout.png"));
 }
 
 TEST_F(TinyScene, BadReferenceNameFailsWithoutOutputs) {
