@@ -1,6 +1,8 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 // Stage 6b: evaluation against the ground truth a data set carries (dense depth + laser sigma,
 // Middlebury disparities and masks, or held-out LiDAR points), with the figures a person reads.
+#include <cmath>
+
 #include <opencv2/imgproc.hpp>
 
 #include "gcpstereo/core/logging.h"
