@@ -39,6 +39,7 @@ ExpansionOptions PlainOptions() {
   ExpansionOptions options;
   options.candidate_labels = CandidateLabels::kAll;
   options.convergence_tolerance = 0.0;
+  options.retry_changed_blocks_only = false;
   options.max_cycles = 100;
   options.verify_moves = true;
   return options;
@@ -116,6 +117,49 @@ TEST(ExpansionMove, GraphEnergyEqualsDirectEnergyAndTheMoveIsOptimal) {
   }
 }
 
+// Pruning (prune_pixels) is exact move by move: the pruned move reaches the brute-force minimum
+// of the binary move, and the cut's energy is the direct energy. Labellings are piecewise
+// constant (runs of equal labels) so that the bound with fixed neighbours fires often.
+TEST(ExpansionMove, PrunedMoveIsStillOptimal) {
+  std::mt19937 rng(11);
+  long long total_pruned = 0;
+  for (int trial = 0; trial < 120; ++trial) {
+    const int num_labels = 3 + trial % 6;
+    const int w = 4, h = 3;
+    const OwnedMrfProblem owned =
+        RandomProblem(w, h, num_labels, 5000 + trial, 0.3, trial % 2 ? 60.0f : 150.0f);
+    const MrfProblem problem = owned.View();
+    EnergyOptions energy;
+    energy.truncation = 1.0 + trial % 3;
+    energy.lambda_s = trial % 3 == 0 ? 5.0 : 20.0;
+    cv::Mat labels(h, w, CV_32S);
+    std::uniform_int_distribution<int> label(0, num_labels - 1);
+    std::bernoulli_distribution repeat(0.7);
+    for (int i = 0; i < w * h; ++i) {
+      labels.ptr<int>(0)[i] = i > 0 && repeat(rng) ? labels.ptr<int>(0)[i - 1] : label(rng);
+    }
+    const int alpha = label(rng);
+    double graph_energy = 0.0;
+    long long pruned = 0;
+    const cv::Mat moved = ExpansionMove(problem, energy, labels, alpha, &graph_energy,
+                                        /*prune_pixels=*/true, &pruned);
+    total_pruned += pruned;
+    const double direct = ComputeEnergy(problem, moved, energy);
+    EXPECT_NEAR(graph_energy, direct, 1e-9 * std::max(1.0, direct)) << "trial " << trial;
+    double best = std::numeric_limits<double>::infinity();
+    for (int mask = 0; mask < (1 << (w * h)); ++mask) {
+      cv::Mat candidate = labels.clone();
+      for (int i = 0; i < w * h; ++i) {
+        if (mask & (1 << i)) candidate.ptr<int>(0)[i] = alpha;
+      }
+      best = std::min(best, ComputeEnergy(problem, candidate, energy));
+    }
+    EXPECT_NEAR(direct, best, 1e-9 * std::max(1.0, best)) << "trial " << trial;
+  }
+  // The test means something only if pixels were actually pruned.
+  EXPECT_GT(total_pruned, 100);
+}
+
 TEST(AlphaExpansion, EnergyNeverIncreasesAndMatchesTheDirectEnergy) {
   const testing::SceneProblem scene = MakeScene(48, 36, 16, 11, 6.0f, 0.02);
   const MrfProblem problem = scene.problem.View();
@@ -183,6 +227,26 @@ TEST(AlphaExpansion, LocalCandidatesStayCloseToPlainExpansion) {
   local.candidate_labels = CandidateLabels::kLocal;
   const ExpansionResult a = AlphaExpansion(problem, EnergyOptions(), plain);
   const ExpansionResult b = AlphaExpansion(problem, EnergyOptions(), local);
+  const double gap = (b.breakdown.total() - a.breakdown.total()) / a.breakdown.total();
+  EXPECT_LT(gap, 0.005) << a.Summary() << "\n" << b.Summary();
+  EXPECT_LT(b.graph_nodes, a.graph_nodes);
+}
+
+TEST(AlphaExpansion, RetryingChangedBlocksOnlyStaysCloseToPlainExpansion) {
+  const testing::SceneProblem scene = MakeScene(64, 48, 16, 23, 6.0f, 0.01);
+  const MrfProblem problem = scene.problem.View();
+  ExpansionOptions plain = PlainOptions();  // verifies every move against ComputeEnergy
+  plain.candidate_block_px = 8;
+  ExpansionOptions retry = plain;
+  retry.retry_changed_blocks_only = true;
+  const ExpansionResult a = AlphaExpansion(problem, EnergyOptions(), plain);
+  const ExpansionResult b = AlphaExpansion(problem, EnergyOptions(), retry);
+  double previous = b.initial_energy;
+  for (double e : b.energy_per_cycle) {
+    EXPECT_LE(e, previous);
+    previous = e;
+  }
+  EXPECT_LT(b.max_energy_mismatch, 1e-6 * b.breakdown.total());
   const double gap = (b.breakdown.total() - a.breakdown.total()) / a.breakdown.total();
   EXPECT_LT(gap, 0.005) << a.Summary() << "\n" << b.Summary();
   EXPECT_LT(b.graph_nodes, a.graph_nodes);

@@ -4,7 +4,10 @@
 //
 //   gcpstereo_optimize_benchmark                       Google Benchmark: Teddy-size (450×375, 60
 //                                                      labels) and Fountain-size (1536×1024, 360
-//                                                      labels, 2×2 tiles, 16 px) problems
+//                                                      labels, 2×2 tiles, 16 px; arg 0 = threads)
+//                                                      problems, the real Middlebury scenes of
+//                                                      the gap report (BM_MiddleburyReal/0..3)
+//                                                      and the sub-label refinements
 //   gcpstereo_optimize_benchmark --gap_report          energy gap of every speed shortcut against
 //                                                      plain α-expansion, per synthetic scene
 //   gcpstereo_optimize_benchmark --gap_report_middlebury   the same on tsukuba, venus, Aloe,
@@ -160,6 +163,7 @@ struct Config {
   bool prune;
   bool skip;
   double tolerance;
+  bool retry_changed_only = false;
 };
 
 const Config kConfigs[] = {
@@ -167,8 +171,9 @@ const Config kConfigs[] = {
     {"+ prune pixels (exact)", CandidateLabels::kAll, true, false, 0.0},
     {"+ skip unchanged labels (exact)", CandidateLabels::kAll, true, true, 0.0},
     {"+ tolerance 1e-4", CandidateLabels::kAll, true, true, 1e-4},
-    {"+ local candidates (= default)", CandidateLabels::kLocal, true, true, 1e-4},
-    {"default with tolerance 1e-3", CandidateLabels::kLocal, true, true, 1e-3},
+    {"+ local candidates", CandidateLabels::kLocal, true, true, 1e-4},
+    {"+ retry changed blocks only (= default)", CandidateLabels::kLocal, true, true, 1e-4, true},
+    {"default with tolerance 1e-3", CandidateLabels::kLocal, true, true, 1e-3, true},
 };
 
 void GapReport(const std::string& scene, const MrfProblem& problem, const EnergyOptions& energy) {
@@ -185,6 +190,7 @@ void GapReport(const std::string& scene, const MrfProblem& problem, const Energy
     options.skip_unchanged_labels = c.skip;
     options.prune_pixels = c.prune;
     options.convergence_tolerance = c.tolerance;
+    options.retry_changed_blocks_only = c.retry_changed_only;
     options.max_cycles = 100;
     const double cpu_start = ThreadCpuSeconds();
     const ExpansionResult r = AlphaExpansion(problem, energy, options);
@@ -443,6 +449,7 @@ void BM_TeddySize(benchmark::State& state) {
   if (state.range(0) == 0) {  // plain
     options.candidate_labels = CandidateLabels::kAll;
     options.skip_unchanged_labels = false;
+    options.retry_changed_blocks_only = false;
     options.prune_pixels = false;
     options.convergence_tolerance = 0.0;
     options.max_cycles = 100;
@@ -503,6 +510,29 @@ void BM_AloeReal(benchmark::State& state) {
 }
 BENCHMARK(BM_AloeReal)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 
+// Every Middlebury scene of the gap report, untiled, default options (one thread). Arg: index
+// into kMiddleburyScenes (0 tsukuba, 1 venus, 2 Aloe, 3 Rocks1).
+void BM_MiddleburyReal(benchmark::State& state) {
+  const MiddleburyScene& scene = kMiddleburyScenes[state.range(0)];
+  const std::string data = SharedData() + "/middlebury/";
+  OwnedMrfProblem problem;
+  if (!LoadMiddlebury(data + scene.left, data + scene.right, scene.labels, &problem)) {
+    state.SkipWithError("../shared/data/middlebury scene not found");
+    return;
+  }
+  problem.prior = SparsePrior(data + scene.gt, scene.gt_scale, problem.image.size());
+  ExpansionResult result;
+  for (auto _ : state) {
+    result = AlphaExpansion(problem.View(), EnergyOptions(), ExpansionOptions());
+  }
+  state.SetLabel(scene.name);
+  state.counters["energy"] = result.breakdown.total();
+  state.counters["cycles"] = result.cycles;
+  state.counters["nodes_M"] = result.graph_nodes / 1e6;
+  state.counters["peak_MiB"] = PeakResidentMemoryBytes() / (1024.0 * 1024.0);
+}
+BENCHMARK(BM_MiddleburyReal)->DenseRange(0, 3)->Unit(benchmark::kSecond)->Iterations(1);
+
 // Sub-label refinement on the synthetic Teddy-size scene (true labels are fractional): time and
 // mean |label − truth| of the discrete labels, the parabola fit and the Ceres problem.
 void BM_Refinement(benchmark::State& state) {
@@ -515,20 +545,24 @@ void BM_Refinement(benchmark::State& state) {
     for (int x = 0; x < 450; ++x) truth.at<float>(y, x) = static_cast<float>(scene.Truth(x, y));
   RefinementOptions options;
   options.method = static_cast<RefinementMethod>(state.range(0));
+  options.max_iterations = static_cast<int>(state.range(1));  // Ceres only
   cv::Mat refined;
   RefinementSummary summary;
   for (auto _ : state) {
     refined = RefineSubLabel(problem.View(), discrete, EnergyOptions(), options, &summary);
   }
   state.SetLabel(RefinementMethodName(options.method));
+  state.counters["solver_converged"] = summary.solver_converged;
   state.counters["mean_abs_err"] = cv::mean(cv::abs(refined - truth))[0];
   state.counters["iterations"] = summary.iterations;
   state.counters["peak_MiB"] = PeakResidentMemoryBytes() / (1024.0 * 1024.0);
 }
 BENCHMARK(BM_Refinement)
-    ->Arg(static_cast<int>(RefinementMethod::kNone))
-    ->Arg(static_cast<int>(RefinementMethod::kParabola))
-    ->Arg(static_cast<int>(RefinementMethod::kCeres))
+    ->Args({static_cast<int>(RefinementMethod::kNone), 50})
+    ->Args({static_cast<int>(RefinementMethod::kParabola), 50})
+    ->Args({static_cast<int>(RefinementMethod::kCeres), 50})  // the default
+    ->Args({static_cast<int>(RefinementMethod::kCeres), 10})
+    ->Args({static_cast<int>(RefinementMethod::kCeres), 3})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 
@@ -554,6 +588,7 @@ void BM_Fountain(benchmark::State& state) {
   std::fprintf(stderr, "%s\n", result.Summary().c_str());
 }
 BENCHMARK(BM_Fountain)
+    ->Args({1, static_cast<int>(RefinementMethod::kNone)})
     ->Args({2, static_cast<int>(RefinementMethod::kNone)})
     ->Args({2, static_cast<int>(RefinementMethod::kCeres)})
     ->Unit(benchmark::kSecond)

@@ -77,14 +77,13 @@ class ExpansionSolver {
           weight_down_[p] = options_.lambda_s * PairWeight(color[col], below[col], options_);
       }
     }
-    // Σ_q λs·w_pq over the 4 neighbours (for the exact pixel pruning in Move()).
-    weight_sum_.assign(num_pixels_, 0.0);
-    for (int p = 0; p < num_pixels_; ++p) {
-      const int col = p % width_;
-      weight_sum_[p] = weight_right_[p] + weight_down_[p] + (col > 0 ? weight_right_[p - 1] : 0.0) +
-                       (p >= width_ ? weight_down_[p - width_] : 0.0);
-    }
     node_of_pixel_.assign(num_pixels_, -1);
+    mark_.assign(num_pixels_, 0);
+    block_mark_.assign(static_cast<std::size_t>(blocks_x_) * blocks_y_, 0);
+    nodes_.assign(num_pixels_, 0);
+    cost_keep_.assign(num_pixels_, 0.0);
+    cost_alpha_.assign(num_pixels_, 0.0);
+    unary_alpha_.assign(num_pixels_, 0.0);
     block_stamp_.assign(static_cast<std::size_t>(blocks_x_) * blocks_y_, 0);
   }
 
@@ -130,127 +129,247 @@ class ExpansionSolver {
   int label(int p) const { return labels_[p]; }
   long long last_pruned() const { return last_pruned_; }
 
-  // Builds and solves the α-move over the pixels of `blocks` (all blocks when empty) whose label
+  // The pair (first, second) of two nodes with labels f_first, f_second: the table
+  // E00 = V(f_first, f_second), E01 = V(f_first, α), E10 = V(α, f_second), E11 = V(α, α) = 0
+  // (x = 1: takes α) as unaries and one edge (add_term2 of Kolmogorov & Zabih).
+  void AddPairEdge(int first, int f_first, int second, int f_second, double weight, int alpha,
+                   double* energy_before) {
+    const double a = Pair(weight, f_first, f_second);
+    double b = Pair(weight, f_first, alpha);
+    double c = Pair(weight, alpha, f_second);
+    *energy_before += a;
+    cost_keep_[first] += a;  // x_first = 0 pays A
+    b -= a;                  // table now [0, B−A; C, 0]
+    if (b < 0) {
+      cost_keep_[first] += b;
+      cost_keep_[second] -= b;
+      c += b;
+      b = 0;
+    } else if (c < 0) {
+      cost_keep_[first] -= c;
+      cost_keep_[second] += c;
+      b += c;
+      c = 0;
+    }
+    // Regularity (b + c >= 0) holds because V is a metric; rounding can leave −1e-15.
+    graph_->add_edge(first, second, std::max(b, 0.0), std::max(c, 0.0));
+  }
+
+  // Row-major spans of the blocks `blocks` (sorted block ids; all blocks when null); marks the
+  // blocks of move serial_ in block_mark_.
+  void BuildSpans(const std::vector<int>* blocks) {
+    spans_.clear();
+    auto add = [&](int by, int bx_begin, int bx_end) {
+      spans_.push_back(Span{by * block_px_, std::min(height_, (by + 1) * block_px_),
+                            bx_begin * block_px_, std::min(width_, bx_end * block_px_)});
+    };
+    if (!blocks) {
+      std::fill(block_mark_.begin(), block_mark_.end(), serial_);
+      for (int by = 0; by < blocks_y_; ++by) add(by, 0, blocks_x_);
+      return;
+    }
+    for (int b : *blocks) block_mark_[b] = serial_;
+    // Consecutive blocks of one block row merge into one span. Spans are visited one after the
+    // other (each row by row), block rows top to bottom, so a pixel's left and upper neighbours
+    // in the region are always visited before it.
+    std::size_t k = 0;
+    while (k < blocks->size()) {
+      const int by = (*blocks)[k] / blocks_x_;
+      int bx_begin = (*blocks)[k] % blocks_x_, bx_end = bx_begin + 1;
+      ++k;
+      while (k < blocks->size() && (*blocks)[k] / blocks_x_ == by &&
+             (*blocks)[k] % blocks_x_ == bx_end) {
+        ++bx_end;
+        ++k;
+      }
+      add(by, bx_begin, bx_end);
+    }
+  }
+
+  // Builds and solves the α-move over the pixels of `blocks` (all blocks when null) whose label
   // is not α. Returns the number of graph nodes; *delta = energy after − energy before of the
   // optimal move (<= 0 up to rounding). The move is applied only when `apply_if` says so.
+  //
+  // One pass over the region in row-major spans (BuildSpans): a pixel's left and upper
+  // neighbours inside the region are visited before it, its right and lower ones after it, so
+  // the graph is built with mostly sequential memory access and every pair is added once, when
+  // its later pixel is visited (or from the inside when the later pixel is outside the region).
+  // Per pixel p with f_p ≠ α:
+  //  * pruning (prune_pixels): p keeps f_p in every optimal move when its unary increase
+  //    U_p(α) − U_p(f_p) exceeds the most its pair terms can fall, Σ_q b_pq with
+  //      b_pq = V_pq(f_p, α)                        q may still take α (a node, or not visited),
+  //      b_pq = V_pq(f_p, f_q) − V_pq(α, f_q)       q keeps f_q (outside the region, labelled α,
+  //                                                  or pruned before p),
+  //    since V(f_p, x) − V(α, x) <= V(f_p, α) (triangle inequality) bounds the fall for every
+  //    state of q. A pruned pixel is fixed in every optimal move, so using its exact term for
+  //    later pixels keeps the pruning exact (tested against brute force);
+  //  * otherwise p becomes a node with unaries U_p(f_p) (keep) and U_p(α) (take α).
   template <typename ApplyIf>
   int Move(int alpha, const std::vector<int>* blocks, long long stamp, double* delta,
            ApplyIf apply_if) {
-    nodes_.clear();
-    unary_alpha_.clear();
-    long long pruned = 0;
-    auto collect_block = [&](int b) {
-      const int bx = b % blocks_x_, by = b / blocks_x_;
-      const int row_end = std::min(height_, (by + 1) * block_px_);
-      const int col_end = std::min(width_, (bx + 1) * block_px_);
-      for (int row = by * block_px_; row < row_end; ++row) {
-        for (int col = bx * block_px_; col < col_end; ++col) {
-          const int p = row * width_ + col;
-          const int fp = labels_[p];
-          if (fp == alpha) continue;
-          const double u_alpha = Unary(p, alpha);
-          // Exact pruning: switching p to α changes its pair terms by at most
-          // Σ_q [V(f_p, x_q) − V(α, x_q)] <= Σ_q V(f_p, α) (triangle inequality), so when the
-          // unary increase exceeds that, every labelling with p = α is strictly improved by
-          // putting f_p back: p keeps f_p in every optimal move and can stay out of the graph.
-          if (prune_pixels_ &&
-              u_alpha - unary_current_[p] >
-                  weight_sum_[p] * std::min<double>(std::abs(fp - alpha), options_.truncation) *
-                          (1.0 + 1e-12) +
-                      1e-9) {
-            ++pruned;
-            continue;
-          }
-          node_of_pixel_[p] = static_cast<int>(nodes_.size());
-          nodes_.push_back(p);
-          unary_alpha_.push_back(u_alpha);
-        }
-      }
-    };
-    if (blocks) {
-      for (int b : *blocks) collect_block(b);
-    } else {
-      for (int b = 0; b < num_blocks(); ++b) collect_block(b);
-    }
-    last_pruned_ = pruned;
-    const int num_nodes = static_cast<int>(nodes_.size());
-    *delta = 0.0;
-    if (num_nodes == 0) return 0;
+    ++serial_;
+    const std::uint32_t kFixed = 2 * serial_, kNode = 2 * serial_ + 1;
+    BuildSpans(blocks);
+    const double truncation = options_.truncation;
     if (!graph_) {
       graph_ = std::make_unique<Graph>(num_pixels_, 2 * num_pixels_, &ThrowMaxflowError);
     } else {
       graph_->reset();
     }
-    graph_->add_node(num_nodes);
-    cost_keep_.assign(num_nodes, 0.0);
-    cost_alpha_.assign(num_nodes, 0.0);
+    int num_nodes = 0;
+    long long pruned = 0;
     double energy_before = 0.0;  // the terms this move can change, at the current labelling
-    for (int i = 0; i < num_nodes; ++i) {
-      const int p = nodes_[i];
-      const int fp = labels_[p];
-      const int row = p / width_, col = p - row * width_;
-      cost_keep_[i] += unary_current_[p];
-      cost_alpha_[i] += unary_alpha_[i];
-      energy_before += unary_current_[p];
-      // Pairs with the left/upper neighbour are handled here only when that neighbour is fixed;
-      // pairs between two nodes are added once, from the left/upper node.
-      auto fixed_neighbour = [&](int q, double weight) {
-        const int fq = labels_[q];
-        const double keep = Pair(weight, fp, fq);
-        cost_keep_[i] += keep;
-        cost_alpha_[i] += Pair(weight, alpha, fq);
-        energy_before += keep;
-      };
-      auto pair = [&](int q, double weight) {
-        const int j = node_of_pixel_[q];
-        if (j < 0) {
-          fixed_neighbour(q, weight);
-          return;
+    for (const Span& span : spans_) {
+      for (int row = span.row_begin; row < span.row_end; ++row) {
+        const int base = row * width_;
+        const bool has_up = row > 0, has_down = row + 1 < height_;
+        const bool down_in_span = row + 1 < span.row_end;
+        const int next_block_row = ((row + 1) / block_px_) * blocks_x_;
+        for (int col = span.col_begin; col < span.col_end; ++col) {
+          const int p = base + col;
+          const int fp = labels_[p];
+          const bool has_left = col > 0, has_right = col + 1 < width_;
+          const bool right_in = col + 1 < span.col_end;  // spans never touch side by side
+          const bool down_in =
+              has_down &&
+              (down_in_span || block_mark_[next_block_row + col / block_px_] == serial_);
+          bool is_node = false;
+          double u_alpha = 0.0;
+          if (fp != alpha) {
+            u_alpha = Unary(p, alpha);
+            is_node = true;
+            if (prune_pixels_) {
+              const double v_alpha = std::min<double>(std::abs(fp - alpha), truncation);
+              auto fixed_fall = [&](int q) {
+                const int fq = labels_[q];
+                return std::min<double>(std::abs(fp - fq), truncation) -
+                       std::min<double>(std::abs(alpha - fq), truncation);
+              };
+              double bound = 0.0, weights = 0.0;
+              if (has_left) {
+                const double w = weight_right_[p - 1];
+                weights += w;
+                bound += w * (mark_[p - 1] == kNode ? v_alpha : fixed_fall(p - 1));
+              }
+              if (has_up) {
+                const double w = weight_down_[p - width_];
+                weights += w;
+                bound += w * (mark_[p - width_] == kNode ? v_alpha : fixed_fall(p - width_));
+              }
+              if (has_right) {
+                const double w = weight_right_[p];
+                weights += w;
+                bound += w * (right_in && labels_[p + 1] != alpha ? v_alpha : fixed_fall(p + 1));
+              }
+              if (has_down) {
+                const double w = weight_down_[p];
+                weights += w;
+                bound += w * (down_in && labels_[p + width_] != alpha ? v_alpha
+                                                                      : fixed_fall(p + width_));
+              }
+              const double increase = u_alpha - unary_current_[p];
+              // Strictly greater, with a margin far above the rounding of these few sums.
+              const double margin = 1e-9 * (1.0 + std::abs(u_alpha) + std::abs(unary_current_[p]) +
+                                            weights * truncation);
+              if (increase > bound + margin) {
+                is_node = false;
+                ++pruned;
+              }
+            }
+          }
+          mark_[p] = is_node ? kNode : kFixed;
+          int i = -1;
+          if (is_node) {
+            i = num_nodes++;
+            graph_->add_node(1);
+            nodes_[i] = p;
+            node_of_pixel_[p] = i;
+            cost_keep_[i] = unary_current_[p];
+            cost_alpha_[i] = u_alpha;
+            unary_alpha_[i] = u_alpha;
+            energy_before += unary_current_[p];
+          }
+          // The pairs with the left and upper neighbours (visited before p, or outside the region:
+          // then they keep their labels, like pruned pixels).
+          auto earlier = [&](int q, double weight) {
+            const bool q_node = mark_[q] == kNode;
+            if (!q_node && !is_node) return;
+            const int fq = labels_[q];
+            if (q_node && is_node) {
+              AddPairEdge(node_of_pixel_[q], fq, i, fp, weight, alpha, &energy_before);
+            } else if (q_node) {  // p keeps f_p: a unary of q
+              const int j = node_of_pixel_[q];
+              const double keep = Pair(weight, fq, fp);
+              cost_keep_[j] += keep;
+              cost_alpha_[j] += Pair(weight, alpha, fp);
+              energy_before += keep;
+            } else {  // q keeps f_q: a unary of p
+              const double keep = Pair(weight, fp, fq);
+              cost_keep_[i] += keep;
+              cost_alpha_[i] += Pair(weight, alpha, fq);
+              energy_before += keep;
+            }
+          };
+          if (has_left) earlier(p - 1, weight_right_[p - 1]);
+          if (has_up) earlier(p - width_, weight_down_[p - width_]);
+          // The pairs with right and lower neighbours outside the region (they keep their labels).
+          if (is_node) {
+            auto outside = [&](int q, double weight) {
+              const int fq = labels_[q];
+              const double keep = Pair(weight, fp, fq);
+              cost_keep_[i] += keep;
+              cost_alpha_[i] += Pair(weight, alpha, fq);
+              energy_before += keep;
+            };
+            if (has_right && !right_in) outside(p + 1, weight_right_[p]);
+            if (has_down && !down_in) outside(p + width_, weight_down_[p]);
+          }
         }
-        const int fq = labels_[q];
-        // E00 = A, E01 = B, E10 = C, E11 = D = V(α, α) = 0; add_term2 of Kolmogorov & Zabih.
-        const double a = Pair(weight, fp, fq);
-        double b = Pair(weight, fp, alpha);
-        double c = Pair(weight, alpha, fq);
-        energy_before += a;
-        cost_keep_[i] += a;  // x_p = 0 pays A
-        b -= a;              // table now [0, B−A; C, 0]
-        if (b < 0) {
-          cost_keep_[i] += b;
-          cost_keep_[j] -= b;
-          c += b;
-          b = 0;
-        } else if (c < 0) {
-          cost_keep_[i] -= c;
-          cost_keep_[j] += c;
-          b += c;
-          c = 0;
-        }
-        // Regularity (b + c >= 0) holds because V is a metric; rounding can leave −1e-15.
-        graph_->add_edge(i, j, std::max(b, 0.0), std::max(c, 0.0));
-      };
-      if (col > 0 && node_of_pixel_[p - 1] < 0) fixed_neighbour(p - 1, weight_right_[p - 1]);
-      if (row > 0 && node_of_pixel_[p - width_] < 0) {
-        fixed_neighbour(p - width_, weight_down_[p - width_]);
       }
-      if (col + 1 < width_) pair(p + 1, weight_right_[p]);
-      if (row + 1 < height_) pair(p + width_, weight_down_[p]);
     }
-    for (int i = 0; i < num_nodes; ++i) graph_->add_tweights(i, cost_alpha_[i], cost_keep_[i]);
+    last_pruned_ = pruned;
+    *delta = 0.0;
+    if (num_nodes == 0) return 0;
+    for (int n = 0; n < num_nodes; ++n) graph_->add_tweights(n, cost_alpha_[n], cost_keep_[n]);
     const double energy_after = graph_->maxflow();
     *delta = energy_after - energy_before;
     const bool apply = apply_if(*delta, energy_before);
-    for (int i = 0; i < num_nodes; ++i) {
-      const int p = nodes_[i];
-      node_of_pixel_[p] = -1;
-      if (apply && graph_->what_segment(i) == Graph::SINK) {
+    if (apply) {
+      for (int n = 0; n < num_nodes; ++n) {
+        if (graph_->what_segment(n) != Graph::SINK) continue;
+        const int p = nodes_[n];
         labels_[p] = alpha;
-        unary_current_[p] = unary_alpha_[i];
+        unary_current_[p] = unary_alpha_[n];
         const int row = p / width_, col = p - row * width_;
         block_stamp_[(row / block_px_) * blocks_x_ + col / block_px_] = stamp;
       }
     }
     return num_nodes;
+  }
+
+  // The blocks of `blocks` (all when null) whose 3×3 block neighbourhood had a label change after
+  // `since` (the blocks where the α-move tried at `since` may now find something else).
+  std::vector<int> ChangedBlocks(const std::vector<int>* blocks, long long since) const {
+    std::vector<int> out;
+    auto changed = [&](int b) {
+      const int bx = b % blocks_x_, by = b / blocks_x_;
+      for (int y = std::max(0, by - 1); y <= std::min(blocks_y_ - 1, by + 1); ++y) {
+        for (int x = std::max(0, bx - 1); x <= std::min(blocks_x_ - 1, bx + 1); ++x) {
+          if (block_stamp_[y * blocks_x_ + x] > since) return true;
+        }
+      }
+      return false;
+    };
+    if (blocks) {
+      for (int b : *blocks) {
+        if (changed(b)) out.push_back(b);
+      }
+    } else {
+      for (int b = 0; b < num_blocks(); ++b) {
+        if (changed(b)) out.push_back(b);
+      }
+    }
+    return out;
   }
 
   // True when no label in `blocks` or their 8 neighbour blocks changed after `since`.
@@ -280,11 +399,19 @@ class ExpansionSolver {
   std::vector<std::uint16_t> costs_by_label_;
   bool use_prior_ = false;
   std::vector<float> prior_;
-  std::vector<double> weight_right_, weight_down_, weight_sum_;
+  std::vector<double> weight_right_, weight_down_;
   std::vector<int> labels_;
   std::vector<double> unary_current_;
-  std::vector<int> node_of_pixel_, nodes_;
-  std::vector<double> cost_keep_, cost_alpha_, unary_alpha_;
+  struct Span {
+    int row_begin, row_end, col_begin, col_end;
+  };
+  std::vector<Span> spans_;
+  std::uint32_t serial_ = 0;         // α-moves built so far (pixel marks of move s: 2s, 2s + 1)
+  std::vector<std::uint32_t> mark_;  // per pixel: 2s = fixed, 2s + 1 = node in move s
+  std::vector<std::uint32_t> block_mark_;  // per block: s when the block is in move s
+  std::vector<int> node_of_pixel_;
+  std::vector<int> nodes_;                                    // per node: its pixel
+  std::vector<double> cost_keep_, cost_alpha_, unary_alpha_;  // per node
   std::vector<long long> block_stamp_;
   std::unique_ptr<Graph> graph_;
   long long last_pruned_ = 0;
@@ -308,12 +435,14 @@ void CheckLabels(const MrfProblem& problem, const cv::Mat& labels, const char* w
 
 // Per block: the candidate labels of CandidateLabels::kLocal (see the header), returned as
 // per-label lists of block ids in increasing order.
-std::vector<std::vector<int>> LocalCandidateBlocks(
-    const MrfProblem& problem, const cv::Mat& initial_labels, const ExpansionOptions& options,
-    const EnergyOptions& energy_options, int blocks_x, int blocks_y, double* mean_candidates) {
+std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, const cv::Mat& wta,
+                                                   const cv::Mat& initial_labels,
+                                                   const ExpansionOptions& options,
+                                                   const EnergyOptions& energy_options,
+                                                   int blocks_x, int blocks_y,
+                                                   double* mean_candidates) {
   const int num_labels = problem.num_labels(), block = options.candidate_block_px;
   const int num_blocks = blocks_x * blocks_y, radius = options.candidate_radius;
-  const cv::Mat wta = WinnerTakeAll(*problem.data);
   std::vector<int> votes(static_cast<std::size_t>(num_blocks) * num_labels, 0);
   for (int row = 0; row < problem.height(); ++row) {
     for (int col = 0; col < problem.width(); ++col) {
@@ -432,8 +561,15 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
   if (!initial_labels.empty()) {
     CheckLabels(problem, initial_labels, "AlphaExpansion: the initial labelling");
     labels = initial_labels.clone();
-  } else {
-    labels = WinnerTakeAll(*problem.data);
+  }
+  // The winner-take-all labels (one pass over the cost volume): the start labelling and the
+  // votes of the local candidate sets.
+  cv::Mat wta;
+  if (initial_labels.empty() || options.candidate_labels == CandidateLabels::kLocal) {
+    wta = WinnerTakeAll(*problem.data);
+  }
+  if (initial_labels.empty()) {
+    labels = wta.clone();
     if (options.initialization == Initialization::kPrior && !problem.prior.empty()) {
       for (int row = 0; row < labels.rows; ++row) {
         for (int col = 0; col < labels.cols; ++col) {
@@ -453,7 +589,7 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
   std::vector<std::vector<int>> blocks_of_label;
   if (options.candidate_labels == CandidateLabels::kLocal) {
     blocks_of_label =
-        LocalCandidateBlocks(problem, labels, options, energy_options, solver.blocks_x(),
+        LocalCandidateBlocks(problem, wta, labels, options, energy_options, solver.blocks_x(),
                              solver.blocks_y(), &result.mean_candidates_per_block);
   } else {
     result.mean_candidates_per_block = num_labels;
@@ -481,8 +617,16 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
           continue;
         }
       }
-      if (options.skip_unchanged_labels && last_tried[alpha] >= 0 &&
-          solver.Unchanged(blocks, last_tried[alpha])) {
+      std::vector<int> changed_blocks;
+      if (options.retry_changed_blocks_only && last_tried[alpha] >= 0) {
+        changed_blocks = solver.ChangedBlocks(blocks, last_tried[alpha]);
+        if (changed_blocks.empty()) {
+          ++result.moves_skipped;
+          continue;
+        }
+        blocks = &changed_blocks;
+      } else if (options.skip_unchanged_labels && last_tried[alpha] >= 0 &&
+                 solver.Unchanged(blocks, last_tried[alpha])) {
         ++result.moves_skipped;
         continue;
       }
@@ -538,14 +682,16 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
 }
 
 cv::Mat ExpansionMove(const MrfProblem& problem, const EnergyOptions& energy_options,
-                      const cv::Mat& labels, int alpha, double* graph_energy) {
+                      const cv::Mat& labels, int alpha, double* graph_energy, bool prune_pixels,
+                      long long* pixels_pruned) {
   problem.Validate();
   energy_options.Check();
   CheckLabels(problem, labels, "ExpansionMove: the labelling");
-  ExpansionSolver solver(problem, energy_options, 16, /*prune_pixels=*/false);
+  ExpansionSolver solver(problem, energy_options, 16, prune_pixels);
   solver.SetLabels(labels);
   double delta = 0.0;
   solver.Move(alpha, nullptr, 1, &delta, [](double, double) { return true; });
+  if (pixels_pruned) *pixels_pruned = solver.last_pruned();
   const cv::Mat out = solver.Labels();
   if (graph_energy) *graph_energy = ComputeEnergy(problem, labels, energy_options) + delta;
   return out;
