@@ -1,8 +1,10 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/optimize/tiling.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -107,6 +109,31 @@ TEST_F(TilingTest, OneThreadEqualsTwoThreadsBitForBit) {
     EXPECT_EQ(a.energy_sum, b.energy_sum);
     EXPECT_FALSE(a.cancelled);
   }
+}
+
+// Progress advances within tiles (not only when a tile finishes), never goes back, ends at 1,
+// and returning false cancels the remaining work.
+TEST_F(TilingTest, ProgressAdvancesWithinTilesAndCanCancel) {
+  TilingOptions tiling;  // 2 × 2
+  ExpansionOptions expansion;
+  expansion.num_threads = 1;
+  std::vector<double> fractions;
+  const TiledResult done = OptimizeTiled(scene_.truth.size(), Maker(), EnergyOptions(), expansion,
+                                         tiling, {}, [&](double f) {
+                                           fractions.push_back(f);
+                                           return true;
+                                         });
+  EXPECT_FALSE(done.cancelled);
+  ASSERT_GT(fractions.size(), 4u * 3u);  // set-up, cycles and hand-over of each of 4 tiles
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+  EXPECT_LT(fractions.front(), 0.25);
+
+  int calls = 0;
+  const TiledResult stopped =
+      OptimizeTiled(scene_.truth.size(), Maker(), EnergyOptions(), expansion, tiling, {},
+                    [&](double) { return ++calls < 3; });
+  EXPECT_TRUE(stopped.cancelled);
 }
 
 TEST_F(TilingTest, MeanBlendAveragesTheTilesInTheOverlaps) {

@@ -72,7 +72,8 @@ using MakeTileProblem = std::function<OwnedMrfProblem(const cv::Rect& region)>;
 // of AlphaExpansion on the whole image, as float. When `refinement.method` is not kNone, each
 // tile is refined with RefineSubLabel while its costs exist, before merging (1 × 1 then equals
 // AlphaExpansion + RefineSubLabel on the whole image). `initial_labels` (CV_32S, whole image) is
-// optional. Progress counts finished tiles.
+// optional. Progress: each tile counts for an equal share, advanced after its cost set-up, during
+// its expansion cycles and when it is done; returning false from `progress` cancels.
 TiledResult OptimizeTiled(cv::Size image_size, const MakeTileProblem& make_problem,
                           const EnergyOptions& energy_options,
                           const ExpansionOptions& expansion_options,
