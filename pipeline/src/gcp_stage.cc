@@ -3,11 +3,13 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <utility>
 
 #include <opencv2/imgproc.hpp>
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
+#include "gcpstereo/gcp/calibrated_stereo_gcps.h"
 #include "gcpstereo/gcp/gcp_sources.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
 #include "gcpstereo/io/image_io.h"
@@ -157,6 +159,22 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       const cv::Mat depth = ReadDepthMapSource(config.gcp.depth_map, dataset, config.dataset.scale);
       sets.push_back(
           gcp::GcpsFromDepthMap(depth, config.gcp.depth_map.sigma, GcpSource::kDepthMap, &summary));
+    } else if (source == "stereo" && !dataset.rectified) {
+      // Calibrated views: rectify the reference with each neighbour, confirm across pairs.
+      double z0 = provisional_labels.DepthOfLabel(0);
+      double z1 = provisional_labels.DepthOfLabel(provisional_labels.count() - 1);
+      if (z0 > z1) std::swap(z0, z1);
+      const gcp::CalibratedStereoGcpResult stereo = gcp::ExtractCalibratedStereoGcps(
+          dataset.reference, dataset.neighbors, z0, z1, config.gcp.stereo);
+      for (const gcp::CalibratedPairSummary& p : stereo.pairs) {
+        spdlog::info(
+            "stereo GCPs: pair with '{}' (B = {:.4g}, f = {:.1f} px{}, d {}..{}): {} matches, {} "
+            "on the reference grid, {} confirmed, {:.1f} s",
+            p.neighbor, p.baseline, p.focal_px, p.mirrored ? ", mirrored" : "", p.min_disparity_px,
+            p.max_disparity_px, p.num_matches, p.num_projected, p.num_confirmed, p.seconds);
+      }
+      summary = stereo.summary;
+      sets.push_back(stereo.gcps);
     } else if (source == "stereo") {
       const RectifiedPair pair = FindRectifiedPair(dataset, "gcp.sources: stereo");
       // Pair disparities of the label range: numerator / depth at both ends.

@@ -107,6 +107,33 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("gcp.stereo.sigma_px", &gcp.stereo.sigma_px, Range::AtLeast(0.0),
          {"standard deviation attributed to a stereo GCP", "px"});
 
+  s->Add("gcp.stereo.min_uniqueness_aw", &gcp.stereo.min_uniqueness_aw, Range{0.0, 1.0, true, false},
+         {"adaptive-weight WTA uniqueness (c2 - c1) / c2 must reach this (0 = off)"});
+  s->Add("gcp.stereo.min_uniqueness_ncc", &gcp.stereo.min_uniqueness_ncc,
+         Range{0.0, 1.0, true, false},
+         {"NCC WTA uniqueness (cost 1 - ncc) must reach this (0 = off)"});
+  s->Add("gcp.stereo.min_uniqueness_bt", &gcp.stereo.min_uniqueness_bt, Range{0.0, 1.0, true, false},
+         {"Birchfield-Tomasi WTA uniqueness must reach this (0 = off)"});
+  s->Add("gcp.stereo.min_texture_std", &gcp.stereo.min_texture_std, Range::Between(0.0, 128.0),
+         {"grey-level standard deviation in the texture window must reach this (0 = off)",
+          "grey levels"});
+  s->Add("gcp.stereo.texture_window_px", &gcp.stereo.texture_window_px, Range::Between(3, 31),
+         {"texture test window side, odd", "px"});
+  s->Add("gcp.stereo.occlusion_margin_px", &gcp.stereo.occlusion_margin_px,
+         Range::Between(-1, 50),
+         {"drop matches in or within this margin of a band occluded in the other view (-1 = off)",
+          "px"});
+  s->Add("gcp.stereo.value", &gcp.stereo.value, {"median", "ncc"},
+         {"disparity given to a GCP: median of the three WTAs or the NCC WTA"});
+  s->Add("gcp.stereo.max_neighbors", &gcp.stereo.max_neighbors, Range::Between(1, 20),
+         {"calibrated views: neighbours rectified with the reference and matched"});
+  s->Add("gcp.stereo.min_confirmations", &gcp.stereo.min_confirmations, Range::Between(0, 19),
+         {"calibrated views: other pairs that must confirm a GCP's depth"});
+  s->Add("gcp.stereo.confirm_radius_px", &gcp.stereo.confirm_radius_px, Range::Between(0, 10),
+         {"calibrated views: search radius of a confirmation", "px"});
+  s->Add("gcp.stereo.confirm_sigma", &gcp.stereo.confirm_sigma, Range::GreaterThan(0.0),
+         {"calibrated views: depths agree within this many combined sigmas"});
+
   s->Add("cost.method", &cost.method, {"auto", "plane_sweep", "birchfield_tomasi"},
          {"matching cost: auto = Birchfield–Tomasi for a rectified pair, plane sweep otherwise"});
   s->Add(

@@ -165,7 +165,7 @@ TEST_P(MiddleburyStereoGcpsTest, Table1DensityOutliersAndPropagatedAccuracy) {
       "R %d  %.1f s\n",
       scene.name.c_str(), result.density_percent, stats.outlier_percent, stats.num_outliers,
       stats.num_evaluated, result.num_candidates_left, result.num_candidates_right, result.seconds);
-  EXPECT_LE(stats.outlier_percent, 5.0);  // target ≤ 2 %, see the report
+  EXPECT_LE(stats.outlier_percent, 1.0);  // measured 0.01 % / 0.08 % (issue target: ≤ 2 %)
   EXPECT_GT(result.density_percent, 1.0);
 
   // D̂ from the stereo GCPs and from ground truth sampled at s = 16 (block centres).

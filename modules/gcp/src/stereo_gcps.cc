@@ -16,7 +16,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -29,27 +31,45 @@
 namespace gcpstereo::gcp {
 namespace {
 
-struct WtaMaps {
-  cv::Mat bt, ncc, aw;  // CV_32S, −1 = invalid
-};
+// Uniqueness u = (c₂ − c₁) / c₂ of a cost curve: c₁ = cost[best], c₂ the lowest cost among the
+// valid entries more than 1 px from best. 0 when there is no such entry or c₂ <= 0.
+float UniquenessOfCurve(const double* cost, const bool* valid, int count, int best) {
+  double c2 = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < count; ++i) {
+    if (valid[i] && std::abs(i - best) > 1) c2 = std::min(c2, cost[i]);
+  }
+  if (!std::isfinite(c2) || c2 <= 0.0) return 0.0f;
+  return static_cast<float>(std::max(0.0, (c2 - cost[best]) / c2));
+}
 
 // WTA of BT (sum over channels, untruncated), reference = `ref`, target pixel x − d: the cost
 // module's Birchfield–Tomasi volume over the whole image, ties to the smallest disparity.
-cv::Mat WtaBirchfieldTomasi(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax) {
+void WtaBirchfieldTomasi(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax,
+                         cv::Mat* wta_out, cv::Mat* uniqueness) {
   std::vector<double> disparities;
   for (int d = dmin; d <= dmax; ++d) disparities.push_back(d);
   const CostVolume volume = cost::ComputeBirchfieldTomasiCost(ref, target, disparities,
                                                               cv::Rect(0, 0, ref.cols, ref.rows),
                                                               cost::BirchfieldTomasiOptions{});
   cv::Mat wta = cost::WinnerTakeAll(volume);
+  *uniqueness = cv::Mat(ref.size(), CV_32F, cv::Scalar(0.0f));
+  const int num_d = dmax - dmin + 1;
+  std::vector<double> curve(num_d);
+  std::unique_ptr<bool[]> valid(new bool[num_d]);
   // Labels index `disparities`: shift to disparities, keeping −1 (no valid disparity).
   for (int y = 0; y < wta.rows; ++y) {
     int* row = wta.ptr<int>(y);
     for (int x = 0; x < wta.cols; ++x) {
-      if (row[x] >= 0) row[x] += dmin;
+      if (row[x] < 0) continue;
+      for (int i = 0; i < num_d; ++i) {
+        valid[i] = volume.HasData(y, x, i);
+        curve[i] = volume.Cost(y, x, i);
+      }
+      uniqueness->at<float>(y, x) = UniquenessOfCurve(curve.data(), valid.get(), num_d, row[x]);
+      row[x] += dmin;
     }
   }
-  return wta;
+  *wta_out = wta;
 }
 
 // Target image shifted so that shifted(x) = target(x − d) (edge replicated where x − d is outside).
@@ -74,7 +94,38 @@ cv::Mat SumChannels(const cv::Mat& m) {
   return sum;
 }
 
-cv::Mat WtaNcc(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax, int window) {
+// The four lowest costs seen so far at one pixel, ascending (ties: the earlier, i.e. smaller, d).
+// Only b − 1 and b + 1 can be within 1 px of the best b, so the best cost more than 1 px away from
+// b is among these four: the exact uniqueness without storing the whole curve.
+struct TopFour {
+  std::array<double, 4> cost;
+  std::array<int, 4> d;
+  int size = 0;
+  void Insert(double c, int disparity) {
+    int pos = size;
+    while (pos > 0 && c < cost[pos - 1]) --pos;
+    if (pos >= 4) return;
+    for (int k = std::min(size, 3); k > pos; --k) {
+      cost[k] = cost[k - 1];
+      d[k] = d[k - 1];
+    }
+    cost[pos] = c;
+    d[pos] = disparity;
+    size = std::min(size + 1, 4);
+  }
+  float Uniqueness() const {
+    for (int k = 1; k < size; ++k) {
+      if (std::abs(d[k] - d[0]) > 1) {
+        return cost[k] > 0.0 ? static_cast<float>(std::max(0.0, (cost[k] - cost[0]) / cost[k]))
+                             : 0.0f;
+      }
+    }
+    return 0.0f;
+  }
+};
+
+void WtaNcc(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax, int window, cv::Mat* wta,
+            cv::Mat* uniqueness) {
   const cv::Size ksize(window, window);
   const double n = 3.0 * window * window;
   cv::Mat ref64, tgt64;
@@ -87,8 +138,7 @@ cv::Mat WtaNcc(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax, in
   };
   const cv::Mat s_ref = box(ref64);
   const cv::Mat s_ref2 = box(ref64.mul(ref64));
-  cv::Mat best(ref.size(), CV_64F, cv::Scalar(-std::numeric_limits<double>::infinity()));
-  cv::Mat wta(ref.size(), CV_32S, cv::Scalar(-1));
+  std::vector<TopFour> top(static_cast<size_t>(ref.rows) * ref.cols);
   for (int d = dmin; d <= dmax; ++d) {
     const cv::Mat shifted = Shifted(tgt64, d);
     const cv::Mat s_t = box(shifted);
@@ -102,14 +152,20 @@ cv::Mat WtaNcc(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax, in
         const double denominator = std::sqrt(std::max(0.0, var_r) * std::max(0.0, var_t));
         if (denominator < 1e-6) continue;  // a flat patch has no correlation
         const double ncc = (s_rt.at<double>(y, x) - sr * st / n) / denominator;
-        if (ncc > best.at<double>(y, x)) {
-          best.at<double>(y, x) = ncc;
-          wta.at<int>(y, x) = d;
-        }
+        top[static_cast<size_t>(y) * ref.cols + x].Insert(1.0 - ncc, d);
       }
     }
   }
-  return wta;
+  *wta = cv::Mat(ref.size(), CV_32S, cv::Scalar(-1));
+  *uniqueness = cv::Mat(ref.size(), CV_32F, cv::Scalar(0.0f));
+  for (int y = 0; y < ref.rows; ++y) {
+    for (int x = 0; x < ref.cols; ++x) {
+      const TopFour& t = top[static_cast<size_t>(y) * ref.cols + x];
+      if (t.size == 0) continue;
+      wta->at<int>(y, x) = t.d[0];
+      uniqueness->at<float>(y, x) = t.Uniqueness();
+    }
+  }
 }
 
 cv::Mat ToLab(const cv::Mat& bgr) {
@@ -119,8 +175,9 @@ cv::Mat ToLab(const cv::Mat& bgr) {
   return lab;
 }
 
-cv::Mat WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax,
-                           const StereoGcpOptions& options) {
+void WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax,
+                        const StereoGcpOptions& options, cv::Mat* wta_out, cv::Mat* uniqueness,
+                        cv::Mat* subpixel) {
   const int width = ref.cols;
   const int height = ref.rows;
   const int num_d = dmax - dmin + 1;
@@ -161,6 +218,8 @@ cv::Mat WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, 
   const float inv_gamma_c = static_cast<float>(1.0 / options.aw_gamma_c);
 
   cv::Mat wta(ref.size(), CV_32S, cv::Scalar(-1));
+  *uniqueness = cv::Mat(ref.size(), CV_32F, cv::Scalar(0.0f));
+  *subpixel = cv::Mat(ref.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
     std::vector<float> w_ref(static_cast<size_t>(width) * num_k);
     std::vector<float> w_tgt(static_cast<size_t>(width) * num_k);
@@ -179,6 +238,8 @@ cv::Mat WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, 
         }
       }
     };
+    std::vector<double> curve(num_d);
+    std::unique_ptr<bool[]> valid(new bool[num_d]);
     for (int y = rows.begin(); y < rows.end(); ++y) {
       support(ref_lab, y, &w_ref);
       support(tgt_lab, y, &w_tgt);
@@ -186,9 +247,11 @@ cv::Mat WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, 
       for (int x = 0; x < width; ++x) {
         const float* wr = &w_ref[static_cast<size_t>(x) * num_k];
         double best = std::numeric_limits<double>::infinity();
+        int best_i = -1;
         for (int i = 0; i < num_d; ++i) {
           const int d = dmin + i;
           const int xt = x - d;
+          valid[i] = false;
           if (xt < 0 || xt >= width) continue;
           const float* wt = &w_tgt[static_cast<size_t>(xt) * num_k];
           double numerator = 0.0, denominator = 0.0;
@@ -201,24 +264,33 @@ cv::Mat WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, 
           }
           if (denominator <= 0.0) continue;
           const double cost = numerator / denominator;
+          valid[i] = true;
+          curve[i] = cost;
           if (cost < best) {
             best = cost;
+            best_i = i;
             out[x] = d;
           }
+        }
+        if (best_i >= 0) {
+          uniqueness->at<float>(y, x) = UniquenessOfCurve(curve.data(), valid.get(), num_d, best_i);
+          // Parabola through the costs at best − 1, best, best + 1 (vertex offset in (−½, ½)).
+          float refined = static_cast<float>(dmin + best_i);
+          if (best_i > 0 && best_i + 1 < num_d && valid[best_i - 1] && valid[best_i + 1]) {
+            const double c_minus = curve[best_i - 1], c0 = curve[best_i],
+                         c_plus = curve[best_i + 1];
+            const double curvature = c_minus - 2.0 * c0 + c_plus;
+            if (curvature > 0.0) {
+              refined +=
+                  static_cast<float>(std::clamp(0.5 * (c_minus - c_plus) / curvature, -0.5, 0.5));
+            }
+          }
+          subpixel->at<float>(y, x) = refined;
         }
       }
     }
   });
-  return wta;
-}
-
-WtaMaps ComputeWtaMaps(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax,
-                       const StereoGcpOptions& options) {
-  WtaMaps maps;
-  maps.bt = WtaBirchfieldTomasi(ref, target, dmin, dmax);
-  maps.ncc = WtaNcc(ref, target, dmin, dmax, options.ncc_window_px);
-  maps.aw = WtaAdaptiveWeights(ref, target, dmin, dmax, options);
-  return maps;
+  *wta_out = wta;
 }
 
 cv::Mat EdgeMask(const cv::Mat& bgr, const StereoGcpOptions& options) {
@@ -232,27 +304,113 @@ cv::Mat EdgeMask(const cv::Mat& bgr, const StereoGcpOptions& options) {
   return edges;
 }
 
+cv::Mat TextureStd(const cv::Mat& bgr, int window) {
+  cv::Mat grey, grey64, mean, mean2;
+  cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+  grey.convertTo(grey64, CV_64F);
+  const cv::Size ksize(window, window);
+  cv::boxFilter(grey64, mean, CV_64F, ksize, cv::Point(-1, -1), true, cv::BORDER_REFLECT_101);
+  cv::boxFilter(grey64.mul(grey64), mean2, CV_64F, ksize, cv::Point(-1, -1), true,
+                cv::BORDER_REFLECT_101);
+  cv::Mat variance = mean2 - mean.mul(mean);
+  variance = cv::max(variance, 0.0);
+  cv::Mat std64, std32;
+  cv::sqrt(variance, std64);
+  std64.convertTo(std32, CV_32F);
+  return std32;
+}
+
+// Evidence of `ref` against `target` (target pixel x − d).
+StereoViewEvidence ComputeViewEvidence(const cv::Mat& ref, const cv::Mat& target, int dmin,
+                                       int dmax, const StereoGcpOptions& options) {
+  StereoViewEvidence e;
+  WtaBirchfieldTomasi(ref, target, dmin, dmax, &e.wta_bt, &e.uniqueness_bt);
+  WtaNcc(ref, target, dmin, dmax, options.ncc_window_px, &e.wta_ncc, &e.uniqueness_ncc);
+  WtaAdaptiveWeights(ref, target, dmin, dmax, options, &e.wta_aw, &e.uniqueness_aw, &e.subpixel_aw);
+  e.texture_std = TextureStd(ref, options.texture_window_px);
+  e.edges = EdgeMask(ref, options);
+  return e;
+}
+
+void FlipEvidence(StereoViewEvidence* e) {
+  for (cv::Mat* m : {&e->wta_bt, &e->wta_ncc, &e->wta_aw, &e->uniqueness_bt, &e->uniqueness_ncc,
+                     &e->uniqueness_aw, &e->subpixel_aw, &e->texture_std, &e->edges}) {
+    cv::flip(*m, *m, 1);
+  }
+}
+
+// True when pixel (y, x) with disparity d lies within margin px of the band occluded by a farther
+// pixel x' (AW WTA d' < d − 1) on the side the occlusions are on (left view: x' < x, right view:
+// x' > x): |x − x'| <= d − d' + margin.
+bool InOccludedBand(const cv::Mat& wta_aw, int y, int x, int d, int margin, bool search_left) {
+  const int* row = wta_aw.ptr<int>(y);
+  const int step = search_left ? -1 : 1;
+  // |x − x'| <= d − d' + margin <= d + margin.
+  for (int k = 1; k <= d + margin; ++k) {
+    const int xq = x + step * k;
+    if (xq < 0 || xq >= wta_aw.cols) break;
+    const int dq = row[xq];
+    if (dq >= 0 && dq < d - 1 && k <= d - dq + margin) return true;
+  }
+  return false;
+}
+
+struct CandidateCounts {
+  int candidates = 0, near_edges = 0, low_texture = 0, occluded = 0, ambiguous = 0;
+};
+
 // Candidates of one view: CV_32F median disparity, NaN = not a candidate.
-cv::Mat Candidates(const WtaMaps& maps, const cv::Mat& edges, const StereoGcpOptions& options,
-                   int* num_candidates, int* num_near_edges) {
-  cv::Mat candidates(maps.bt.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  *num_candidates = 0;
-  *num_near_edges = 0;
+cv::Mat Candidates(const StereoViewEvidence& e, const StereoGcpOptions& options, bool search_left,
+                   CandidateCounts* counts) {
+  cv::Mat candidates(e.wta_bt.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  *counts = CandidateCounts{};
   for (int y = 0; y < candidates.rows; ++y) {
     for (int x = 0; x < candidates.cols; ++x) {
-      std::array<int, 3> d = {maps.bt.at<int>(y, x), maps.ncc.at<int>(y, x), maps.aw.at<int>(y, x)};
+      std::array<int, 3> d = {e.wta_bt.at<int>(y, x), e.wta_ncc.at<int>(y, x),
+                              e.wta_aw.at<int>(y, x)};
       if (d[0] < 0 || d[1] < 0 || d[2] < 0) continue;
       std::sort(d.begin(), d.end());
       if (d[2] - d[0] > options.max_spread_px) continue;
-      if (edges.at<uchar>(y, x)) {
-        ++*num_near_edges;
+      if (e.edges.at<uchar>(y, x)) {
+        ++counts->near_edges;
         continue;
       }
-      candidates.at<float>(y, x) = static_cast<float>(d[1]);
-      ++*num_candidates;
+      if (e.texture_std.at<float>(y, x) < options.min_texture_std) {
+        ++counts->low_texture;
+        continue;
+      }
+      if (options.occlusion_margin_px >= 0 &&
+          InOccludedBand(e.wta_aw, y, x, d[1], options.occlusion_margin_px, search_left)) {
+        ++counts->occluded;
+        continue;
+      }
+      if (e.uniqueness_aw.at<float>(y, x) < options.min_uniqueness_aw ||
+          e.uniqueness_ncc.at<float>(y, x) < options.min_uniqueness_ncc ||
+          e.uniqueness_bt.at<float>(y, x) < options.min_uniqueness_bt) {
+        ++counts->ambiguous;
+        continue;
+      }
+      candidates.at<float>(y, x) =
+          static_cast<float>(options.value == "ncc" ? e.wta_ncc.at<int>(y, x) : d[1]);
+      ++counts->candidates;
     }
   }
   return candidates;
+}
+
+void CheckEvidence(const StereoViewEvidence& e, cv::Size size) {
+  for (const cv::Mat* m : {&e.wta_bt, &e.wta_ncc, &e.wta_aw, &e.uniqueness_bt, &e.uniqueness_ncc,
+                           &e.uniqueness_aw, &e.texture_std, &e.edges}) {
+    if (m->size() != size) {
+      throw Error("SelectStereoGcps: evidence maps are missing or of different sizes");
+    }
+  }
+  if (e.wta_bt.type() != CV_32S || e.wta_ncc.type() != CV_32S || e.wta_aw.type() != CV_32S ||
+      e.uniqueness_bt.type() != CV_32F || e.uniqueness_ncc.type() != CV_32F ||
+      e.uniqueness_aw.type() != CV_32F || e.texture_std.type() != CV_32F ||
+      e.edges.type() != CV_8U) {
+    throw Error("SelectStereoGcps: evidence maps have the wrong types");
+  }
 }
 
 }  // namespace
@@ -287,12 +445,43 @@ void StereoGcpOptions::Check() const {
   if (!(aw_truncation > 0.0))
     fail("aw_truncation", FormatNumber(aw_truncation), "aw_truncation > 0");
   if (!(sigma_px >= 0.0)) fail("sigma_px", FormatNumber(sigma_px), "sigma_px >= 0");
+  for (const auto& [key, value] :
+       {std::pair<const char*, double>{"min_uniqueness_aw", min_uniqueness_aw},
+        {"min_uniqueness_ncc", min_uniqueness_ncc},
+        {"min_uniqueness_bt", min_uniqueness_bt}}) {
+    if (!(value >= 0.0 && value < 1.0)) {
+      fail(key, FormatNumber(value), std::string("0 <= ") + key + " < 1");
+    }
+  }
+  if (!(min_texture_std >= 0.0 && min_texture_std <= 128.0)) {
+    fail("min_texture_std", FormatNumber(min_texture_std), "0 <= min_texture_std <= 128");
+  }
+  if (occlusion_margin_px < -1 || occlusion_margin_px > 50) {
+    fail("occlusion_margin_px", std::to_string(occlusion_margin_px),
+         "-1 <= occlusion_margin_px <= 50");
+  }
+  if (max_neighbors < 1 || max_neighbors > 20) {
+    fail("max_neighbors", std::to_string(max_neighbors), "1 <= max_neighbors <= 20");
+  }
+  if (min_confirmations < 0 || min_confirmations > 19) {
+    fail("min_confirmations", std::to_string(min_confirmations), "0 <= min_confirmations <= 19");
+  }
+  if (confirm_radius_px < 0 || confirm_radius_px > 10) {
+    fail("confirm_radius_px", std::to_string(confirm_radius_px), "0 <= confirm_radius_px <= 10");
+  }
+  if (!(confirm_sigma > 0.0))
+    fail("confirm_sigma", FormatNumber(confirm_sigma), "confirm_sigma > 0");
+  if (value != "median" && value != "ncc") fail("value", value, "one of median, ncc");
+  if (texture_window_px < 3 || texture_window_px > 31 || texture_window_px % 2 == 0) {
+    fail("texture_window_px", std::to_string(texture_window_px),
+         "odd, 3 <= texture_window_px <= 31");
+  }
 }
 
-StereoGcpResult ExtractStereoGcps(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
-                                  int min_disparity_px, int max_disparity_px,
-                                  const StereoGcpOptions& options,
-                                  const ProgressCallback& progress) {
+StereoPairEvidence ComputeStereoEvidence(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
+                                         int min_disparity_px, int max_disparity_px,
+                                         const StereoGcpOptions& options,
+                                         const ProgressCallback& progress) {
   options.Check();
   if (left_bgr.empty() || left_bgr.type() != CV_8UC3 || right_bgr.type() != CV_8UC3 ||
       left_bgr.size() != right_bgr.size()) {
@@ -305,49 +494,72 @@ StereoGcpResult ExtractStereoGcps(const cv::Mat& left_bgr, const cv::Mat& right_
                 std::to_string(left_bgr.cols) + ")");
   }
   const auto start = std::chrono::steady_clock::now();
-  StereoGcpResult result;
-  const WtaMaps left_maps =
-      ComputeWtaMaps(left_bgr, right_bgr, min_disparity_px, max_disparity_px, options);
+  StereoPairEvidence evidence;
+  evidence.left =
+      ComputeViewEvidence(left_bgr, right_bgr, min_disparity_px, max_disparity_px, options);
   if (progress && !progress(0.5)) throw Error("ExtractStereoGcps: cancelled");
   // The right view as reference: mirror both images, so that right pixel x ↔ left x + d becomes
   // the left-reference case x' ↔ x' − d, and mirror the result back.
   cv::Mat left_flipped, right_flipped;
   cv::flip(left_bgr, left_flipped, 1);
   cv::flip(right_bgr, right_flipped, 1);
-  WtaMaps right_maps =
-      ComputeWtaMaps(right_flipped, left_flipped, min_disparity_px, max_disparity_px, options);
-  cv::flip(right_maps.bt, right_maps.bt, 1);
-  cv::flip(right_maps.ncc, right_maps.ncc, 1);
-  cv::flip(right_maps.aw, right_maps.aw, 1);
+  evidence.right =
+      ComputeViewEvidence(right_flipped, left_flipped, min_disparity_px, max_disparity_px, options);
+  FlipEvidence(&evidence.right);
   if (progress && !progress(1.0)) throw Error("ExtractStereoGcps: cancelled");
+  evidence.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return evidence;
+}
 
-  result.edges = EdgeMask(left_bgr, options);
-  int right_near_edges = 0;
-  const cv::Mat left_candidates = Candidates(
-      left_maps, result.edges, options, &result.num_candidates_left, &result.num_near_edges_left);
-  const cv::Mat right_candidates = Candidates(right_maps, EdgeMask(right_bgr, options), options,
-                                              &result.num_candidates_right, &right_near_edges);
-  result.disparity =
-      cv::Mat(left_bgr.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  for (int y = 0; y < left_bgr.rows; ++y) {
-    for (int x = 0; x < left_bgr.cols; ++x) {
+StereoGcpResult SelectStereoGcps(const StereoPairEvidence& evidence,
+                                 const StereoGcpOptions& options) {
+  options.Check();
+  const cv::Size size = evidence.left.wta_bt.size();
+  if (size.empty()) throw Error("SelectStereoGcps: evidence maps are missing");
+  CheckEvidence(evidence.left, size);
+  CheckEvidence(evidence.right, size);
+  const auto start = std::chrono::steady_clock::now();
+  StereoGcpResult result;
+  CandidateCounts left_counts, right_counts;
+  const cv::Mat left_candidates = Candidates(evidence.left, options, true, &left_counts);
+  const cv::Mat right_candidates = Candidates(evidence.right, options, false, &right_counts);
+  result.num_candidates_left = left_counts.candidates;
+  result.num_candidates_right = right_counts.candidates;
+  result.num_near_edges_left = left_counts.near_edges;
+  result.num_low_texture_left = left_counts.low_texture;
+  result.num_ambiguous_left = left_counts.ambiguous;
+  result.num_occlusion_left = left_counts.occluded;
+  result.disparity = cv::Mat(size, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
       const float d_left = left_candidates.at<float>(y, x);
       if (std::isnan(d_left)) continue;
       const int xr = x - static_cast<int>(d_left);
-      if (xr < 0 || xr >= left_bgr.cols) continue;
+      if (xr < 0 || xr >= size.width) continue;
       const float d_right = right_candidates.at<float>(y, xr);
       if (std::isnan(d_right) || std::abs(d_left - d_right) > options.lr_tolerance_px) continue;
       result.disparity.at<float>(y, x) = d_left;
       ++result.num_gcps;
     }
   }
-  result.wta_bt = left_maps.bt;
-  result.wta_ncc = left_maps.ncc;
-  result.wta_aw = left_maps.aw;
-  result.density_percent =
-      100.0 * result.num_gcps / (static_cast<double>(left_bgr.cols) * left_bgr.rows);
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.wta_bt = evidence.left.wta_bt;
+  result.wta_ncc = evidence.left.wta_ncc;
+  result.wta_aw = evidence.left.wta_aw;
+  result.edges = evidence.left.edges;
+  result.density_percent = 100.0 * result.num_gcps / (static_cast<double>(size.area()));
+  result.seconds = evidence.seconds +
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+StereoGcpResult ExtractStereoGcps(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
+                                  int min_disparity_px, int max_disparity_px,
+                                  const StereoGcpOptions& options,
+                                  const ProgressCallback& progress) {
+  const StereoPairEvidence evidence = ComputeStereoEvidence(left_bgr, right_bgr, min_disparity_px,
+                                                            max_disparity_px, options, progress);
+  return SelectStereoGcps(evidence, options);
 }
 
 GcpSet StereoGcpsToGcpSet(const cv::Mat& disparity, double disparity_numerator, double sigma_px,

@@ -1,0 +1,247 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+//
+// Stereo GCPs for calibrated views (see calibrated_stereo_gcps.h): rectify each
+// reference–neighbour pair, match it with ExtractStereoGcps (Wang & Yang, CVPR 2011, §4.1),
+// triangulate, project into the reference, and keep the depths another pair confirms.
+#include "gcpstereo/gcp/calibrated_stereo_gcps.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Dense>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "gcpstereo/core/error.h"
+#include "gcpstereo/core/logging.h"
+
+namespace gcpstereo::gcp {
+namespace {
+
+// One pair's GCPs on the reference grid: depth (+inf = none) and sigma, CV_64F.
+struct PairMaps {
+  cv::Mat depth, sigma;
+  cv::Mat wta_depth, wta_sigma;  // the pair's dense NCC WTA, same grid (the confirmation source)
+};
+
+PairMaps MatchPair(const View& reference, const View& neighbor, double min_depth, double max_depth,
+                   const StereoGcpOptions& options, CalibratedPairSummary* summary) {
+  const auto start = std::chrono::steady_clock::now();
+  const cv::Size size = reference.image.size();
+  const Camera& ref_camera = reference.camera;
+  const Camera& nb_camera = neighbor.camera;
+  summary->neighbor = neighbor.name;
+  summary->baseline = (ref_camera.center_world - nb_camera.center_world).norm();
+  PairMaps maps;
+  maps.depth = cv::Mat(size, CV_64F, cv::Scalar(kInvalidDepth));
+  maps.sigma = cv::Mat(size, CV_64F, cv::Scalar(0.0));
+  maps.wta_depth = maps.depth.clone();
+  maps.wta_sigma = maps.sigma.clone();
+
+  // Relative pose, camera 1 = reference: X_nb = R X_ref + T.
+  const Eigen::Matrix3d r_rel =
+      nb_camera.world_from_camera_rotation.transpose() * ref_camera.world_from_camera_rotation;
+  const Eigen::Vector3d t_rel = nb_camera.world_from_camera_rotation.transpose() *
+                                (ref_camera.center_world - nb_camera.center_world);
+  cv::Mat k1, k2, r, t;
+  cv::eigen2cv(ref_camera.K, k1);
+  cv::eigen2cv(nb_camera.K, k2);
+  cv::eigen2cv(r_rel, r);
+  cv::eigen2cv(t_rel, t);
+  cv::Mat r1, r2, p1, p2, q;
+  cv::stereoRectify(k1, cv::noArray(), k2, cv::noArray(), size, r, t, r1, r2, p1, p2, q,
+                    cv::CALIB_ZERO_DISPARITY, 1.0, size);
+  if (std::abs(p2.at<double>(1, 3)) > std::abs(p2.at<double>(0, 3))) {
+    spdlog::warn("stereo GCPs: pair ({}, {}) rectifies vertically; skipped", reference.name,
+                 neighbor.name);
+    return maps;
+  }
+  const double f = p1.at<double>(0, 0);
+  const double cx = p1.at<double>(0, 2), cy = p1.at<double>(1, 2);
+  const double baseline = std::abs(p2.at<double>(0, 3)) / f;
+  summary->focal_px = f;
+  summary->mirrored = p2.at<double>(0, 3) > 0.0;  // neighbour left of the reference
+
+  const double fb = f * baseline;
+  const int min_d = std::max(0, static_cast<int>(std::floor(0.9 * fb / max_depth)) - 2);
+  const int max_d = std::min(size.width - 1, static_cast<int>(std::ceil(1.1 * fb / min_depth)) + 2);
+  summary->min_disparity_px = min_d;
+  summary->max_disparity_px = max_d;
+  if (max_d <= min_d) return maps;
+
+  // Rectified images and validity masks (255 = a source pixel, eroded by 1 px against the
+  // interpolation border).
+  auto rectify = [&](const cv::Mat& image, const cv::Mat& k, const cv::Mat& rect,
+                     const cv::Mat& projection, cv::Mat* out, cv::Mat* valid) {
+    cv::Mat map_x, map_y;
+    cv::initUndistortRectifyMap(k, cv::noArray(), rect, projection, size, CV_32FC1, map_x, map_y);
+    cv::remap(image, *out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    const cv::Mat ones(image.size(), CV_8U, cv::Scalar(255));
+    cv::remap(ones, *valid, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+    cv::erode(*valid, *valid, cv::Mat());
+    if (summary->mirrored) {
+      cv::flip(*out, *out, 1);
+      cv::flip(*valid, *valid, 1);
+    }
+  };
+  cv::Mat left, right, left_valid, right_valid;
+  rectify(reference.image, k1, r1, p1, &left, &left_valid);
+  rectify(neighbor.image, k2, r2, p2, &right, &right_valid);
+
+  const StereoPairEvidence evidence = ComputeStereoEvidence(left, right, min_d, max_d, options);
+  const StereoGcpResult stereo = SelectStereoGcps(evidence, options);
+  summary->num_matches = stereo.num_gcps;
+
+  Eigen::Matrix3d rect_from_ref;
+  cv::cv2eigen(r1, rect_from_ref);
+  const Eigen::Matrix3d ref_from_rect = rect_from_ref.transpose();
+  // Rectified (mirrored) left pixel (x, y) at disparity d → reference pixel and z-buffered depth.
+  auto splat = [&](int x, int y, double d, cv::Mat* depth_map, cv::Mat* sigma_map) {
+    const int xr = x - static_cast<int>(std::lround(d));
+    if (!(d > 0.0) || !left_valid.at<uchar>(y, x) || xr < 0 || !right_valid.at<uchar>(y, xr)) {
+      return false;
+    }
+    const double x_rect = summary->mirrored ? size.width - 1 - x : x;
+    const double z_rect = fb / d;
+    const Eigen::Vector3d point_rect((x_rect - cx) * z_rect / f, (y - cy) * z_rect / f, z_rect);
+    const Eigen::Vector3d point_ref = ref_from_rect * point_rect;
+    if (!(point_ref.z() > 0.0)) return false;
+    const Eigen::Vector3d uvw = ref_camera.K * point_ref;
+    const int col = static_cast<int>(std::lround(uvw.x() / uvw.z()));
+    const int row = static_cast<int>(std::lround(uvw.y() / uvw.z()));
+    if (col < 0 || row < 0 || col >= size.width || row >= size.height) return false;
+    if (point_ref.z() < depth_map->at<double>(row, col)) {
+      depth_map->at<double>(row, col) = point_ref.z();
+      // σ_z = z² σ_d / (f B), with the rectified pair's z.
+      sigma_map->at<double>(row, col) = z_rect * z_rect * options.sigma_px / fb;
+    }
+    return true;
+  };
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      const float d = stereo.disparity.at<float>(y, x);
+      if (std::isfinite(d) && !splat(x, y, d, &maps.depth, &maps.sigma)) ++summary->num_invalid;
+      const int d_wta = evidence.left.wta_ncc.at<int>(y, x);
+      if (d_wta > 0) splat(x, y, d_wta, &maps.wta_depth, &maps.wta_sigma);
+    }
+  }
+  summary->num_projected = cv::countNonZero(maps.depth < kInvalidDepth);
+  summary->seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return maps;
+}
+
+}  // namespace
+
+CalibratedStereoGcpResult ExtractCalibratedStereoGcps(const View& reference,
+                                                      const std::vector<View>& neighbors,
+                                                      double min_depth, double max_depth,
+                                                      const StereoGcpOptions& options,
+                                                      const ProgressCallback& progress) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  if (neighbors.empty()) throw Error("ExtractCalibratedStereoGcps: no neighbour view");
+  if (!(min_depth > 0.0) || !(max_depth > min_depth) || !std::isfinite(max_depth)) {
+    throw Error("ExtractCalibratedStereoGcps: depth range [" + FormatNumber(min_depth) + ", " +
+                FormatNumber(max_depth) + "] must satisfy 0 < min < max < inf");
+  }
+  const int num_pairs = std::min<int>(options.max_neighbors, static_cast<int>(neighbors.size()));
+  // The nearest neighbours (camera centres; ties: list order).
+  std::vector<int> order(neighbors.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return (neighbors[a].camera.center_world - reference.camera.center_world).norm() <
+           (neighbors[b].camera.center_world - reference.camera.center_world).norm();
+  });
+  auto check_view = [](const View& view) {
+    view.camera.Validate("view '" + view.name + "'");
+    if (view.image.type() != CV_8UC3 || view.image.cols != view.camera.width ||
+        view.image.rows != view.camera.height) {
+      throw Error("ExtractCalibratedStereoGcps: view '" + view.name +
+                  "' must be a CV_8UC3 image of its camera's size");
+    }
+  };
+  check_view(reference);
+  for (int i = 0; i < num_pairs; ++i) {
+    const View& neighbor = neighbors[order[i]];
+    check_view(neighbor);
+    if (neighbor.image.size() != reference.image.size()) {
+      throw Error("ExtractCalibratedStereoGcps: view '" + neighbor.name +
+                  "' differs in size from the reference");
+    }
+    if ((neighbor.camera.center_world - reference.camera.center_world).norm() <= 0.0) {
+      throw Error("ExtractCalibratedStereoGcps: view '" + neighbor.name +
+                  "' has the reference's camera centre (no baseline)");
+    }
+  }
+
+  CalibratedStereoGcpResult result;
+  std::vector<PairMaps> maps(num_pairs);
+  result.pairs.resize(num_pairs);
+  for (int i = 0; i < num_pairs; ++i) {
+    maps[i] =
+        MatchPair(reference, neighbors[order[i]], min_depth, max_depth, options, &result.pairs[i]);
+    if (progress && !progress((i + 1.0) / num_pairs)) {
+      throw Error("ExtractCalibratedStereoGcps: cancelled");
+    }
+  }
+
+  // Consistency between pairs, then the smallest sigma per pixel.
+  const int width = reference.image.cols, height = reference.image.rows;
+  const int radius = options.confirm_radius_px;
+  GcpSourceSummary& summary = result.summary;
+  summary.source = GcpSourceName(GcpSource::kStereo);
+  for (int row = 0; row < height; ++row) {
+    for (int col = 0; col < width; ++col) {
+      int best = -1;
+      for (int i = 0; i < num_pairs; ++i) {
+        const double z = maps[i].depth.at<double>(row, col);
+        if (!std::isfinite(z)) continue;
+        ++summary.num_input;
+        const double sigma = maps[i].sigma.at<double>(row, col);
+        int confirmations = 0;
+        for (int j = 0; j < num_pairs && confirmations < options.min_confirmations; ++j) {
+          if (j == i) continue;
+          bool agrees = false;
+          for (int r = std::max(0, row - radius);
+               r <= std::min(height - 1, row + radius) && !agrees; ++r) {
+            for (int c = std::max(0, col - radius); c <= std::min(width - 1, col + radius); ++c) {
+              const double zj = maps[j].wta_depth.at<double>(r, c);
+              if (!std::isfinite(zj)) continue;
+              const double sj = maps[j].wta_sigma.at<double>(r, c);
+              if (std::abs(z - zj) <= options.confirm_sigma * std::sqrt(sigma * sigma + sj * sj)) {
+                agrees = true;
+                break;
+              }
+            }
+          }
+          if (agrees) ++confirmations;
+        }
+        if (confirmations < options.min_confirmations) {
+          ++summary.num_inconsistent;
+          continue;
+        }
+        ++result.pairs[i].num_confirmed;
+        if (best < 0 || sigma < maps[best].sigma.at<double>(row, col)) best = i;
+      }
+      if (best < 0) continue;
+      Gcp gcp;
+      gcp.col = col;
+      gcp.row = row;
+      gcp.depth = maps[best].depth.at<double>(row, col);
+      gcp.sigma = maps[best].sigma.at<double>(row, col);
+      gcp.source = GcpSource::kStereo;
+      result.gcps.points.push_back(gcp);
+    }
+  }
+  summary.num_gcps = static_cast<int>(result.gcps.size());
+  summary.density_percent = DensityPercent(result.gcps, width, height);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace gcpstereo::gcp
