@@ -180,5 +180,100 @@ TEST(BirchfieldTomasi, BadInputsAreReported) {
             "cost.bt_truncation = -1. Violated constraint: 0 < bt_truncation < inf");
 }
 
+// Census term by hand: one grey row, census window 3 (the rows above and below replicate the row,
+// so each horizontal neighbour contributes three bits and the vertical ones compare equal → 0).
+// Left ramp up, right ramp down: at x = 2, d = 0 the left centre 30 has its left neighbour darker
+// and the right centre 30 its right neighbour darker → 2 positions × 3 rows = 6 differing bits.
+// BT(30, 30) = 0 there, so the cost is census_weight · 6.
+TEST(BirchfieldTomasiCensus, HandComputedHammingDistance) {
+  const cv::Mat left = GreyRow({10, 20, 30, 40, 50});
+  const cv::Mat right = GreyRow({50, 40, 30, 20, 10});
+  BirchfieldTomasiOptions options;
+  options.census_window_px = 3;
+  options.census_weight = 2.0;
+  options.truncation = 30;
+  const CostVolume v =
+      ComputeBirchfieldTomasiCost(left, right, {0.0}, cv::Rect(0, 0, 5, 1), options);
+  EXPECT_EQ(v.max_cost(), 30.0f + 2.0f * 8);  // truncation + weight · (3² − 1) bits
+  EXPECT_NEAR(v.Cost(0, 2, 0), 12.0f, v.cost_step());
+  // x = 0: left {·, 10, 20} → right neighbour not darker, left (replicated) equal → 0 bits;
+  // right {·, 50, 40} → right neighbour darker → 3 bits. BT(10, 50): L [10, 15], R [45, 50] → 30
+  // (= truncation). Cost 30 + 2 · 3.
+  EXPECT_NEAR(v.Cost(0, 0, 0), 36.0f, v.cost_step());
+}
+
+// The census term is invariant to a monotonic intensity change between the views (exposure,
+// gain), BT is not: on a right image that is 2 · left + 1, the census-only cost (tiny BT
+// truncation) is minimal at the true disparity for every pixel with texture.
+TEST(BirchfieldTomasiCensus, InvariantToMonotonicIntensityChange) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> value(0, 127);
+  const int w = 40, h = 12, true_d = 3;
+  cv::Mat left(h, w, CV_8UC1), right(h, w, CV_8UC1);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) left.at<std::uint8_t>(r, c) = value(rng);
+  }
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      const int src = std::min(c + true_d, w - 1);
+      right.at<std::uint8_t>(r, c) =
+          static_cast<std::uint8_t>(2 * left.at<std::uint8_t>(r, src) + 1);
+    }
+  }
+  BirchfieldTomasiOptions options;
+  options.census_window_px = 5;
+  options.census_weight = 1.0;
+  options.truncation = 0.01;  // BT contributes at most 0.01
+  const std::vector<double> d = {0, 1, 2, 3, 4, 5, 6};
+  const CostVolume v = ComputeBirchfieldTomasiCost(left, right, d, cv::Rect(0, 0, w, h), options);
+  // Columns whose census windows lie inside the image in both views (no border replication).
+  // A local extremum has an all-equal census code and can tie with another extremum, so the
+  // true disparity is the unique minimum on most, not all, pixels.
+  int unique = 0, counted = 0;
+  for (int r = 2; r < h - 2; ++r) {
+    for (int c = 6 + 2; c < w - 2 - true_d; ++c) {
+      EXPECT_LE(v.Cost(r, c, true_d), 0.01f + v.cost_step()) << r << "," << c;
+      bool is_unique = true;
+      for (int l = 0; l < static_cast<int>(d.size()); ++l) {
+        if (l != true_d && v.Cost(r, c, l) <= 0.01f + v.cost_step()) is_unique = false;
+      }
+      unique += is_unique;
+      ++counted;
+    }
+  }
+  EXPECT_GT(unique, 0.9 * counted) << unique << " of " << counted;
+  // BT alone is not invariant: the same pixels at the true disparity cost far more than 0.
+  const CostVolume bt = ComputeBirchfieldTomasiCost(left, right, d, cv::Rect(0, 0, w, h));
+  double mean_bt = 0;
+  for (int r = 2; r < h - 2; ++r) {
+    for (int c = 8; c < w - 2 - true_d; ++c) mean_bt += bt.Cost(r, c, true_d) / counted;
+  }
+  EXPECT_GT(mean_bt, 20.0);
+}
+
+TEST(BirchfieldTomasiCensus, BadOptionsNameTheKey) {
+  auto message = [](const BirchfieldTomasiOptions& o) {
+    try {
+      o.Check();
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  BirchfieldTomasiOptions o;
+  o.census_window_px = 4;
+  EXPECT_EQ(message(o),
+            "cost.census_window_px = 4. Violated constraint: odd and 1 <= census_window_px <= 7");
+  o.census_window_px = 9;
+  EXPECT_EQ(message(o),
+            "cost.census_window_px = 9. Violated constraint: odd and 1 <= census_window_px <= 7");
+  o = {};
+  o.census_weight = -1;
+  EXPECT_EQ(message(o), "cost.census_weight = -1. Violated constraint: 0 <= census_weight < inf");
+  o = {};
+  o.window.window_px = 2;
+  EXPECT_EQ(message(o), "cost.window_px = 2. Violated constraint: odd and 1 <= window_px <= 101");
+}
+
 }  // namespace
 }  // namespace gcpstereo::cost

@@ -3,6 +3,7 @@
 // cameras 0003–0007, exact ground truth, sensor noise and exposure changes).
 #include <cmath>
 #include <iostream>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -149,23 +150,19 @@ cv::Mat TexturedUnoccluded(const Tiny& t) {
   return mask;
 }
 
-// Pixel-wise WTA (no aggregation, no smoothness) on `tiny` is limited by the data, not the sweep:
-// its texture is band-limited to ≈2.5 px, so bilinear resampling of a converging view differs from
-// the reference by ≈6 grey levels even at the exact depth (measured with noise and exposure off),
-// and some wrong depths match better. Measured: 85.6 % of textured unoccluded pixels within one
-// of 24 depth labels (≈0.4 m, 0.5–2 px); the test's own scene (plane_sweep_test.cpp) reaches
-// 99.7 %. The bound below is a regression bound at that measured level, not the brief's 95 %.
-TEST(TinyScene, PlaneSweepWtaNearGroundTruth) {
+// Share of the textured unoccluded pixels of `tiny` whose WTA depth label of the plane sweep is
+// within one of 24 depth labels of the ground truth.
+double WtaWithinOneLabel(const PlaneSweepOptions& options, const std::string& what) {
   const Tiny& t = GetTiny();
   const cv::Mat mask = TexturedUnoccluded(t);
   const int counted = cv::countNonZero(mask);
-  ASSERT_GT(counted, static_cast<int>(t.depth.total() / 4));
+  EXPECT_GT(counted, static_cast<int>(t.depth.total() / 4));
   double z_min = 0, z_max = 0;
   cv::minMaxLoc(t.depth, &z_min, &z_max, nullptr, nullptr, t.depth < 1e30f);
   const LabelSpace labels(LabelSpaceKind::kDepth, 24, 0.9 * z_min, 1.1 * z_max);
   const CostVolume volume = ComputePlaneSweepCost(
       t.reference, t.neighbors, labels,
-      cv::Rect(0, 0, t.reference.image.cols, t.reference.image.rows), PlaneSweepOptions{});
+      cv::Rect(0, 0, t.reference.image.cols, t.reference.image.rows), options);
   const cv::Mat wta = WinnerTakeAll(volume);
   int good = 0;
   for (int r = 0; r < wta.rows; ++r) {
@@ -179,9 +176,34 @@ TEST(TinyScene, PlaneSweepWtaNearGroundTruth) {
   }
   const double fraction = static_cast<double>(good) / counted;
   std::cout << "[ measured ] tiny scene (depth " << z_min << "-" << z_max << " m, 24 depth labels, "
-            << t.neighbors.size() << " neighbours): WTA within one label on " << 100.0 * fraction
-            << " % of " << counted << " textured unoccluded pixels\n";
-  EXPECT_GT(fraction, 0.83);
+            << t.neighbors.size() << " neighbours, " << what << "): WTA within one label on "
+            << 100.0 * fraction << " % of " << counted << " textured unoccluded pixels\n";
+  return fraction;
+}
+
+// Pixel-wise WTA (no aggregation, no smoothness) on `tiny` is limited by the data, not the sweep:
+// its texture is band-limited to ≈2.5 px, so bilinear resampling of a converging view differs from
+// the reference by ≈6 grey levels even at the exact depth (measured with noise and exposure off),
+// and some wrong depths match better. Measured: 85.6 % of textured unoccluded pixels within one
+// of 24 depth labels (≈0.4 m, 0.5–2 px); the test's own scene (plane_sweep_test.cpp) reaches
+// 99.7 %. The bound below is a regression bound at that measured level; the issue's 95 % is
+// reached with a window (next test).
+TEST(TinyScene, PlaneSweepWtaNearGroundTruth) {
+  EXPECT_GT(WtaWithinOneLabel(PlaneSweepOptions{}, "pixel-wise, tau 60"), 0.83);
+}
+
+// The issue's statement, "WTA of the plane sweep on the tiny synthetic scene recovers ground-truth
+// depth to within one label on textured surfaces" (≥ 95 %), holds with a 7×7 box window over the
+// sweep's cost (cost.sweep_window_px: 7, cost.sweep_window_filter: box) and τ = 30
+// (cost.truncation). Measured (same scene and labels): box 7 → 96.2 / 95.9 / 95.5 % at
+// τ = 15 / 20 / 30 and 94.8 % at τ = 60; box 5 / 9 at τ = 30 → 94.7 / 95.1 %; guided 7 (ε 1e-2) at
+// τ = 30 → 94.6 %; windows ≥ 11 fall (they straddle the scene's depth edges).
+TEST(TinyScene, PlaneSweepWtaWithWindowRecoversDepth) {
+  PlaneSweepOptions options;
+  options.truncation = 30;
+  options.window.window_px = 7;
+  options.window.filter = "box";
+  EXPECT_GE(WtaWithinOneLabel(options, "7x7 box window, tau 30"), 0.95);
 }
 
 }  // namespace

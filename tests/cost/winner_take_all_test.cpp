@@ -11,14 +11,14 @@
 namespace gcpstereo::cost {
 namespace {
 
-TEST(WinnerTakeAll, PicksLeastCostSkipsNoDataAndBreaksTiesLow) {
+TEST(WinnerTakeAll, PicksLeastCostSkipsNoDataAndBreaksTiesInTheMiddle) {
   CostVolume v(cv::Rect(10, 20, 3, 2), 4, 100.0f);
   // (0,0): plain minimum at label 2.
   v.SetCost(0, 0, 0, 50);
   v.SetCost(0, 0, 1, 40);
   v.SetCost(0, 0, 2, 10);
   v.SetCost(0, 0, 3, 60);
-  // (0,1): tie between labels 1 and 3 → 1; label 0 has no data.
+  // (0,1): tie between labels 1 and 3 → the lower middle, 1; label 0 has no data.
   v.SetNoData(0, 1, 0);
   v.SetCost(0, 1, 1, 5);
   v.SetCost(0, 1, 2, 9);
@@ -37,6 +37,25 @@ TEST(WinnerTakeAll, PicksLeastCostSkipsNoDataAndBreaksTiesLow) {
   EXPECT_EQ(wta.at<int>(1, 0), -1);
   EXPECT_EQ(wta.at<int>(1, 1), 0);
   EXPECT_EQ(wta.at<int>(1, 2), -1);
+}
+
+// Flat costs (a run of equal minima, typical of pixel-wise BT in weak texture) go to the middle of
+// the tied labels, not to the lowest one.
+TEST(WinnerTakeAll, TiesGoToTheMiddleOfTheTiedLabels) {
+  CostVolume v(cv::Rect(0, 0, 4, 1), 7, 100.0f);
+  const float costs[4][7] = {{9, 1, 1, 1, 9, 9, 9},   // tied 1, 2, 3 → 2
+                             {0, 0, 0, 0, 0, 0, 0},   // all tied → 3
+                             {5, 2, 7, 2, 7, 2, 2},   // tied 1, 3, 5, 6 → lower middle 3
+                             {2, 4, 4, 4, 4, 4, 4}};  // unique minimum 0
+  for (int c = 0; c < 4; ++c) {
+    for (int l = 0; l < 7; ++l) v.SetCost(0, c, l, costs[c][l]);
+  }
+  v.SetNoData(0, 3, 5);
+  const cv::Mat wta = WinnerTakeAll(v);
+  EXPECT_EQ(wta.at<int>(0, 0), 2);
+  EXPECT_EQ(wta.at<int>(0, 1), 3);
+  EXPECT_EQ(wta.at<int>(0, 2), 3);
+  EXPECT_EQ(wta.at<int>(0, 3), 0);
 }
 
 TEST(WinnerTakeAll, LabelsToDepthAndValue) {

@@ -7,6 +7,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <opencv2/imgproc.hpp>
 
 #include "cost_internal.h"
 #include "gcpstereo/core/error.h"
@@ -21,6 +22,15 @@ void BirchfieldTomasiOptions::Check() const {
   if (channels != "sum" && channels != "max") {
     throw ConfigError(ViolatedConstraint("cost.bt_channels", channels, "one of sum, max"));
   }
+  if (census_window_px < 1 || census_window_px > 7 || census_window_px % 2 == 0) {
+    throw ConfigError(ViolatedConstraint("cost.census_window_px", internal::Str(census_window_px),
+                                         "odd and 1 <= census_window_px <= 7"));
+  }
+  if (!(census_weight >= 0.0) || !std::isfinite(census_weight)) {
+    throw ConfigError(ViolatedConstraint("cost.census_weight", internal::Str(census_weight),
+                                         "0 <= census_weight < inf"));
+  }
+  window.Check("cost.");
 }
 
 namespace {
@@ -55,6 +65,123 @@ inline float Dissimilarity(const Triplet& l, const Triplet& r) {
   return std::min(left_to_right, right_to_left);
 }
 
+// Census transform (Zabih & Woodfill 1994) of the rows [y0, y0 + rows) of a grey image over a
+// side × side window, border replicated: bit i is set when neighbour i is darker than the centre.
+cv::Mat CensusRows(const cv::Mat& grey, int y0, int rows, int side) {
+  cv::Mat census(rows, grey.cols, CV_64F);  // 64-bit words stored in a CV_64F-sized Mat
+  const int h = side / 2;
+  for (int r = 0; r < rows; ++r) {
+    std::uint64_t* out = census.ptr<std::uint64_t>(r);
+    const int y = y0 + r;
+    const std::uint8_t* centre_row = grey.ptr<std::uint8_t>(y);
+    for (int x = 0; x < grey.cols; ++x) {
+      const std::uint8_t centre = centre_row[x];
+      std::uint64_t bits = 0;
+      for (int dy = -h; dy <= h; ++dy) {
+        const std::uint8_t* row = grey.ptr<std::uint8_t>(std::clamp(y + dy, 0, grey.rows - 1));
+        for (int dx = -h; dx <= h; ++dx) {
+          if (dx == 0 && dy == 0) continue;
+          bits = (bits << 1) | (row[std::clamp(x + dx, 0, grey.cols - 1)] < centre ? 1u : 0u);
+        }
+      }
+      out[x] = bits;
+    }
+  }
+  return census;
+}
+
+inline int Hamming(std::uint64_t a, std::uint64_t b) { return __builtin_popcountll(a ^ b); }
+
+// The pixel-wise cost (BT, plus census when configured) of `region`.
+CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
+                     const std::vector<double>& disparities_px, const cv::Rect& region,
+                     const BirchfieldTomasiOptions& options) {
+  const int channels = left.channels();
+  const int width = left.cols;
+  const int num_labels = static_cast<int>(disparities_px.size());
+  const float truncation = static_cast<float>(options.truncation);
+  const bool use_max = options.channels == "max";
+  const int census_side = options.census_window_px;
+  const bool use_census = census_side > 1;
+  const float census_weight = static_cast<float>(options.census_weight);
+  const float max_cost =
+      truncation + (use_census ? census_weight * (census_side * census_side - 1) : 0.0f);
+  CostVolume volume(region, num_labels, max_cost);
+  const float inv_step = 1.0f / volume.cost_step();
+
+  cv::Mat census_left, census_right;
+  if (use_census) {
+    cv::Mat grey_left = left, grey_right = right;
+    if (channels == 3) {
+      cv::cvtColor(left, grey_left, cv::COLOR_BGR2GRAY);
+      cv::cvtColor(right, grey_right, cv::COLOR_BGR2GRAY);
+    }
+    census_left = CensusRows(grey_left, region.y, region.height, census_side);
+    census_right = CensusRows(grey_right, region.y, region.height, census_side);
+  }
+
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, region.height, 1),
+      [&](const tbb::blocked_range<int>& range) {
+        // Triplets of the whole left / right row, channel-fastest; integer positions only.
+        std::vector<Triplet> left_triplets(static_cast<std::size_t>(width) * channels);
+        std::vector<Triplet> right_triplets(static_cast<std::size_t>(width) * channels);
+        for (int row_local = range.begin(); row_local != range.end(); ++row_local) {
+          const int y = region.y + row_local;
+          const std::uint8_t* left_row = left.ptr<std::uint8_t>(y);
+          const std::uint8_t* right_row = right.ptr<std::uint8_t>(y);
+          const std::uint64_t* census_l =
+              use_census ? census_left.ptr<std::uint64_t>(row_local) : nullptr;
+          const std::uint64_t* census_r =
+              use_census ? census_right.ptr<std::uint64_t>(row_local) : nullptr;
+          for (int x = 0; x < width; ++x) {
+            for (int ch = 0; ch < channels; ++ch) {
+              left_triplets[x * channels + ch] = TripletAt(left_row, channels, ch, width, x);
+              right_triplets[x * channels + ch] = TripletAt(right_row, channels, ch, width, x);
+            }
+          }
+          std::uint16_t* out = volume.MutablePixelData(row_local, 0);
+          for (int l = 0; l < num_labels; ++l) {
+            const double d = disparities_px[l];
+            const bool integer = d == std::floor(d);
+            for (int c = 0; c < region.width; ++c) {
+              const int x = region.x + c;
+              const double xr = x - d;
+              std::uint16_t& entry = out[static_cast<std::size_t>(c) * num_labels + l];
+              if (!(xr >= 0.0 && xr <= width - 1)) {
+                entry = CostVolume::kNoData;
+                continue;
+              }
+              float cost = 0.0f;
+              for (int ch = 0; ch < channels; ++ch) {
+                const Triplet& lt = left_triplets[x * channels + ch];
+                const Triplet rt = integer ? right_triplets[static_cast<int>(xr) * channels + ch]
+                                           : TripletAt(right_row, channels, ch, width, xr);
+                const float dissimilarity = Dissimilarity(lt, rt);
+                cost = use_max ? std::max(cost, dissimilarity) : cost + dissimilarity;
+              }
+              cost = std::min(cost, truncation);
+              if (use_census) {
+                const int x0 = static_cast<int>(std::floor(xr));
+                const float hamming0 = static_cast<float>(Hamming(census_l[x], census_r[x0]));
+                float hamming = hamming0;
+                if (!integer) {
+                  const float f = static_cast<float>(xr - x0);
+                  const float hamming1 = static_cast<float>(
+                      Hamming(census_l[x], census_r[std::min(x0 + 1, width - 1)]));
+                  hamming = hamming0 + (hamming1 - hamming0) * f;
+                }
+                cost += census_weight * hamming;
+              }
+              entry = internal::Quantise(cost, inv_step);
+            }
+          }
+        }
+      },
+      tbb::simple_partitioner());
+  return volume;
+}
+
 }  // namespace
 
 CostVolume ComputeBirchfieldTomasiCost(const cv::Mat& left, const cv::Mat& right,
@@ -86,57 +213,12 @@ CostVolume ComputeBirchfieldTomasiCost(const cv::Mat& left, const cv::Mat& right
     throw Error(s.str());
   }
 
-  const int channels = left.channels();
-  const int width = left.cols;
-  const int num_labels = static_cast<int>(disparities_px.size());
-  const float truncation = static_cast<float>(options.truncation);
-  const bool use_max = options.channels == "max";
-  CostVolume volume(region, num_labels, truncation);
-  const float inv_step = 1.0f / volume.cost_step();
-
-  tbb::parallel_for(
-      tbb::blocked_range<int>(0, region.height, 1),
-      [&](const tbb::blocked_range<int>& range) {
-        // Triplets of the whole left / right row, channel-fastest; integer positions only.
-        std::vector<Triplet> left_triplets(static_cast<std::size_t>(width) * channels);
-        std::vector<Triplet> right_triplets(static_cast<std::size_t>(width) * channels);
-        for (int row_local = range.begin(); row_local != range.end(); ++row_local) {
-          const int y = region.y + row_local;
-          const std::uint8_t* left_row = left.ptr<std::uint8_t>(y);
-          const std::uint8_t* right_row = right.ptr<std::uint8_t>(y);
-          for (int x = 0; x < width; ++x) {
-            for (int ch = 0; ch < channels; ++ch) {
-              left_triplets[x * channels + ch] = TripletAt(left_row, channels, ch, width, x);
-              right_triplets[x * channels + ch] = TripletAt(right_row, channels, ch, width, x);
-            }
-          }
-          std::uint16_t* out = volume.MutablePixelData(row_local, 0);
-          for (int l = 0; l < num_labels; ++l) {
-            const double d = disparities_px[l];
-            const bool integer = d == std::floor(d);
-            for (int c = 0; c < region.width; ++c) {
-              const int x = region.x + c;
-              const double xr = x - d;
-              std::uint16_t& entry = out[static_cast<std::size_t>(c) * num_labels + l];
-              if (!(xr >= 0.0 && xr <= width - 1)) {
-                entry = CostVolume::kNoData;
-                continue;
-              }
-              float cost = 0.0f;
-              for (int ch = 0; ch < channels; ++ch) {
-                const Triplet& lt = left_triplets[x * channels + ch];
-                const Triplet rt = integer ? right_triplets[static_cast<int>(xr) * channels + ch]
-                                           : TripletAt(right_row, channels, ch, width, xr);
-                const float dissimilarity = Dissimilarity(lt, rt);
-                cost = use_max ? std::max(cost, dissimilarity) : cost + dissimilarity;
-              }
-              entry = internal::Quantise(std::min(cost, truncation), inv_step);
-            }
-          }
-        }
-      },
-      tbb::simple_partitioner());
-  return volume;
+  if (options.window.window_px == 1) {
+    return PixelCost(left, right, disparities_px, region, options);
+  }
+  const cv::Rect outer = GrowRegion(region, options.window.MarginPx(), left.size());
+  return FilterCostVolume(PixelCost(left, right, disparities_px, outer, options), left, region,
+                          options.window);
 }
 
 }  // namespace gcpstereo::cost

@@ -38,6 +38,7 @@ void PlaneSweepOptions::Check() const {
     throw ConfigError(ViolatedConstraint("cost.progress_rows", internal::Str(progress_rows),
                                          "progress_rows >= 1"));
   }
+  window.Check("cost.sweep_");
 }
 
 namespace {
@@ -130,10 +131,13 @@ void MeanOfBestK(std::vector<float>& per_neighbor, int num_neighbors, int width,
 
 }  // namespace
 
-CostVolume ComputePlaneSweepCost(const View& reference, const std::vector<View>& neighbors,
-                                 const LabelSpace& labels, const cv::Rect& region,
-                                 const PlaneSweepOptions& options, const ProgressCallback& progress,
-                                 PlaneSweepSummary* summary) {
+namespace {
+
+// The pixel-wise sweep of `region` (ComputePlaneSweepCost without the window filter).
+CostVolume PlaneSweepPixelCost(const View& reference, const std::vector<View>& neighbors,
+                               const LabelSpace& labels, const cv::Rect& region,
+                               const PlaneSweepOptions& options, const ProgressCallback& progress,
+                               PlaneSweepSummary* summary) {
   const Timer timer;
   options.Check();
   CheckView(reference, "reference");
@@ -282,6 +286,38 @@ CostVolume ComputePlaneSweepCost(const View& reference, const std::vector<View>&
     summary->volume_bytes = static_cast<std::int64_t>(volume.memory_bytes());
     summary->seconds = timer.ElapsedSeconds();
     summary->cancelled = cancelled;
+  }
+  return volume;
+}
+
+}  // namespace
+
+CostVolume ComputePlaneSweepCost(const View& reference, const std::vector<View>& neighbors,
+                                 const LabelSpace& labels, const cv::Rect& region,
+                                 const PlaneSweepOptions& options, const ProgressCallback& progress,
+                                 PlaneSweepSummary* summary) {
+  const Timer timer;
+  options.Check();
+  const cv::Rect image_rect(0, 0, reference.image.cols, reference.image.rows);
+  if (options.window.window_px == 1 || region.empty() || (region & image_rect) != region) {
+    // Pixel-wise (or a bad region, which the sweep reports).
+    return PlaneSweepPixelCost(reference, neighbors, labels, region, options, progress, summary);
+  }
+  const cv::Rect outer = GrowRegion(region, options.window.MarginPx(), reference.image.size());
+  CostVolume volume = FilterCostVolume(
+      PlaneSweepPixelCost(reference, neighbors, labels, outer, options, progress, summary),
+      reference.image, region, options.window);
+  if (summary != nullptr) {
+    std::int64_t no_data = 0;
+    for (int r = 0; r < volume.height(); ++r) {
+      for (int c = 0; c < volume.width(); ++c) {
+        const std::uint16_t* costs = volume.PixelData(r, c);
+        no_data += std::count(costs, costs + volume.num_labels(), CostVolume::kNoData);
+      }
+    }
+    summary->no_data_costs = no_data;
+    summary->volume_bytes = static_cast<std::int64_t>(volume.memory_bytes());
+    summary->seconds = timer.ElapsedSeconds();
   }
   return volume;
 }

@@ -23,11 +23,24 @@ cv::Mat WinnerTakeAll(const CostVolume& volume) {
                           const std::uint16_t* costs = volume.PixelData(row, col);
                           // kNoData (65535) is above every stored cost, so it never wins.
                           std::uint16_t best = CostVolume::kNoData;
-                          int best_label = -1;
+                          int ties = 0;
                           for (int l = 0; l < num_labels; ++l) {
                             if (costs[l] < best) {
                               best = costs[l];
-                              best_label = l;
+                              ties = 1;
+                            } else if (costs[l] == best) {
+                              ++ties;
+                            }
+                          }
+                          // The middle one of the tied labels (lower middle for an even count).
+                          int best_label = -1;
+                          if (best != CostVolume::kNoData) {
+                            const int wanted = (ties - 1) / 2;
+                            for (int l = 0, seen = 0; l < num_labels; ++l) {
+                              if (costs[l] == best && seen++ == wanted) {
+                                best_label = l;
+                                break;
+                              }
                             }
                           }
                           out[col] = best_label;

@@ -7,6 +7,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "gcpstereo/core/cost_volume.h"
+#include "gcpstereo/cost/cost_filter.h"
 
 namespace gcpstereo::cost {
 
@@ -19,6 +20,19 @@ struct BirchfieldTomasiOptions {
   double truncation = 765.0;
   // [cost.bt_channels]: how the per-channel dissimilarities are combined: "sum" (default) or "max".
   std::string channels = "sum";
+  // [cost.census_window_px]: side of the square census-transform window (Zabih & Woodfill, ECCV
+  // 1994) on the grey image, in pixels; 1 = no census term (the paper). With a census window the
+  // pixel cost becomes min(BT, bt_truncation) + census_weight · Hamming(census_L, census_R), as in
+  // the AD-Census family of costs (Mei et al. 2011): the census term is invariant to monotonic
+  // intensity changes between the views and lends the cost the local texture. Range: odd,
+  // 1 <= census_window_px <= 7 (at most 48 bits).
+  int census_window_px = 1;
+  // [cost.census_weight]: cost of one differing census bit, in the grey levels of the BT term.
+  // Range: census_weight >= 0.
+  double census_weight = 2.0;
+  // [cost.window_px], [cost.window_filter], [cost.guided_epsilon]: aggregation of the pixel cost
+  // over a window (see cost_filter.h); window_px 1 = pixel-wise (the paper).
+  CostFilterOptions window;
 
   // Throws ConfigError naming the YAML key of the first invalid field.
   void Check() const;
@@ -34,10 +48,19 @@ struct BirchfieldTomasiOptions {
 //   d(R→L) = max(0, R(x_r) − L_max, L_min − R(x_r)),  L_min/max likewise around x
 //   BT = min(d(L→R), d(R→L))
 // combined over the channels by options.channels (sum or max) and truncated at options.truncation.
+// Extensions beyond the paper (both off by default): options.census_window_px > 1 adds
+// census_weight · Hamming(census of L at x, census of R at x_r) (grey census, bit = neighbour
+// darker than the centre, border replicated; fractional x_r interpolates the Hamming distances of
+// the two integer neighbours linearly); options.window filters each disparity's slice with a box or
+// guided filter (FilterCostVolume) — the pixel costs are then computed on `region` grown by the
+// filter's margin (clipped to the image), so a tile's costs equal the whole image's.
+// Quantisation: max_cost = truncation + census_weight · (census_window_px² − 1); 16-bit step
+// max_cost / 65534 (CostVolume).
 // Fractional d: R(x_r) and R(x_r ± ½) are sampled by linear interpolation (integer d reduces to the
 // textbook definition). Border policy: x_r outside [0, width−1] → no data (CostVolume::kNoData);
 // half-pixel neighbours beyond the border replicate the border pixel.
-// The volume covers `region` of `left`; label l is disparities_px[l]; max_cost = truncation.
+// The volume covers `region` of `left`; label l is disparities_px[l]; max_cost = truncation
+// without census.
 // Images: CV_8UC3 (BGR) or CV_8UC1, same type and size. Rows are computed in parallel; the result
 // does not depend on the thread count. Throws Error for bad images, an empty disparity list, a
 // non-finite disparity or a region outside `left`; ConfigError for bad options.

@@ -11,6 +11,7 @@
 #include "gcpstereo/core/labels.h"
 #include "gcpstereo/core/progress.h"
 #include "gcpstereo/core/types.h"
+#include "gcpstereo/cost/cost_filter.h"
 
 namespace gcpstereo::cost {
 
@@ -39,6 +40,9 @@ struct PlaneSweepOptions {
   // [cost.progress_rows]: rows of the region computed between two progress reports (and
   // cancellation checks). Range: >= 1. Has no influence on the result.
   int progress_rows = 16;
+  // [cost.sweep_window_px], [cost.sweep_window_filter], [cost.sweep_guided_epsilon]: aggregation
+  // of Φ over a window (cost_filter.h); sweep_window_px 1 = pixel-wise (the paper).
+  CostFilterOptions window;
 
   // Throws ConfigError naming the YAML key of the first invalid field.
   void Check() const;
@@ -83,6 +87,10 @@ struct PlaneSweepSummary {
 // Works unchanged for rectified sequences (RectifiedSequenceCamera) with disparity labels, where
 // H reduces to a shift by the label's disparity times the view offset.
 // Deviation from the paper: pixels seen by no neighbour get "no data" instead of a cost.
+// Optional extension (off by default): options.window > 1 filters each label's slice of Φ with a
+// box or guided filter (FilterCostVolume); Φ is then swept on `region` grown by the filter's margin
+// (clipped to the image) so that a tile's costs equal the whole image's, and the summary's samples
+// and votes count that grown region.
 // Throws Error when an image is not CV_8UC3 or does not match its camera's size, when a camera is
 // invalid, or when `region` is not inside the reference image; ConfigError for bad options.
 CostVolume ComputePlaneSweepCost(const View& reference, const std::vector<View>& neighbors,

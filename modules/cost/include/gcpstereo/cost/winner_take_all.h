@@ -9,8 +9,10 @@
 namespace gcpstereo::cost {
 
 // Winner-take-all: per pixel of the volume's region, the label of least cost among the labels that
-// have data (ties → the smallest label). Returns a CV_32S map of the region's size; −1 where no
-// label has data. Rows in parallel (deterministic).
+// have data. Ties (equal quantised costs, frequent where a pixel-wise cost is flat) go to the
+// middle one of the tied labels in label order (the lower middle for an even count): deterministic,
+// and not biased towards the lowest label as "first minimum" would be. Returns a CV_32S map of the
+// region's size; −1 where no label has data. Rows in parallel (deterministic).
 cv::Mat WinnerTakeAll(const CostVolume& volume);
 
 // Converts a label map — CV_32S (−1 or out of [0, count−1] = invalid) or CV_32F (fractional labels;

@@ -1,0 +1,273 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/cost/cost_filter.h"
+
+#include <cstring>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "gcpstereo/core/error.h"
+#include "gcpstereo/cost/birchfield_tomasi.h"
+#include "gcpstereo/cost/plane_sweep.h"
+
+namespace gcpstereo::cost {
+namespace {
+
+bool SameBytes(const CostVolume& a, const CostVolume& b) {
+  if (a.region() != b.region() || a.num_labels() != b.num_labels() ||
+      a.max_cost() != b.max_cost()) {
+    return false;
+  }
+  for (int r = 0; r < a.height(); ++r) {
+    for (int c = 0; c < a.width(); ++c) {
+      if (std::memcmp(a.PixelData(r, c), b.PixelData(r, c),
+                      sizeof(std::uint16_t) * a.num_labels()) != 0) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+cv::Mat RandomImage(int rows, int cols, int type, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> value(0, 255);
+  cv::Mat image(rows, cols, type);
+  for (auto it = image.begin<std::uint8_t>(); it != image.end<std::uint8_t>(); ++it) {
+    *it = static_cast<std::uint8_t>(value(rng));
+  }
+  // Some spatial structure: blocks of constant colour plus noise.
+  cv::Mat blocks(rows / 4 + 1, cols / 4 + 1, type);
+  for (auto it = blocks.begin<std::uint8_t>(); it != blocks.end<std::uint8_t>(); ++it) {
+    *it = static_cast<std::uint8_t>(value(rng));
+  }
+  cv::Mat big;
+  cv::resize(blocks, big, cv::Size(), 4, 4, cv::INTER_NEAREST);
+  cv::addWeighted(big(cv::Rect(0, 0, cols, rows)), 0.8, image, 0.2, 0, image);
+  return image;
+}
+
+// One row, box window 3 (the 3×3 window clipped to the single row is horizontal): hand means,
+// with the no-data entry replaced by its nearest neighbour with data for the filter only.
+TEST(CostFilter, BoxMeanHandComputedWithNoData) {
+  CostVolume raw(cv::Rect(0, 0, 4, 1), 1, 100.0f);
+  raw.SetNoData(0, 0, 0);
+  raw.SetCost(0, 1, 0, 10);
+  raw.SetCost(0, 2, 0, 20);
+  raw.SetCost(0, 3, 0, 60);
+  CostFilterOptions options;
+  options.window_px = 3;
+  options.filter = "box";
+  const cv::Mat guide(1, 4, CV_8UC1, cv::Scalar(0));
+  const CostVolume out = FilterCostVolume(raw, guide, raw.region(), options);
+  const float tol = out.cost_step();
+  EXPECT_EQ(out.max_cost(), 100.0f);
+  EXPECT_FALSE(out.HasData(0, 0, 0));                          // stays without data
+  EXPECT_NEAR(out.Cost(0, 1, 0), (10 + 10 + 20) / 3.0f, tol);  // filled ND = 10
+  EXPECT_NEAR(out.Cost(0, 2, 0), (10 + 20 + 60) / 3.0f, tol);
+  EXPECT_NEAR(out.Cost(0, 3, 0), (20 + 60) / 2.0f, tol);  // window clipped at the border
+}
+
+// 3×3 box on a 3×3 grid: the centre is the mean of all nine, a corner the mean of its 2×2 block.
+TEST(CostFilter, BoxMeanTwoDimensional) {
+  CostVolume raw(cv::Rect(5, 7, 3, 3), 2, 1000.0f);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      raw.SetCost(r, c, 0, static_cast<float>(10 * (3 * r + c)));  // 0 … 80
+      raw.SetCost(r, c, 1, 500.0f);
+    }
+  }
+  CostFilterOptions options;
+  options.window_px = 3;
+  options.filter = "box";
+  const cv::Mat guide(20, 20, CV_8UC3, cv::Scalar(1, 2, 3));
+  const CostVolume out = FilterCostVolume(raw, guide, cv::Rect(6, 8, 2, 2), options);
+  ASSERT_EQ(out.region(), cv::Rect(6, 8, 2, 2));
+  const float tol = out.cost_step();
+  EXPECT_NEAR(out.Cost(0, 0, 0), 40.0f, tol);                                 // centre (1,1) of raw
+  EXPECT_NEAR(out.Cost(1, 1, 0), (40 + 50 + 70 + 80) / 4.0f, tol);            // corner (2,2)
+  EXPECT_NEAR(out.Cost(0, 1, 0), (10 + 20 + 40 + 50 + 70 + 80) / 6.0f, tol);  // edge (1,2)
+  EXPECT_NEAR(out.Cost(1, 0, 1), 500.0f, tol);
+}
+
+// With a constant guide the guided filter has var(I) = 0, so a = 0, b = mean c and the output
+// is the box mean of the box mean (He et al., eq. 8 with a ≡ 0).
+TEST(CostFilter, GuidedWithConstantGuideIsTwoBoxMeans) {
+  CostVolume raw(cv::Rect(0, 0, 7, 5), 1, 100.0f);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> value(0.0f, 100.0f);
+  for (int r = 0; r < 5; ++r) {
+    for (int c = 0; c < 7; ++c) raw.SetCost(r, c, 0, value(rng));
+  }
+  const cv::Mat guide(5, 7, CV_8UC3, cv::Scalar(90, 120, 30));
+  CostFilterOptions box, guided;
+  box.window_px = guided.window_px = 3;
+  box.filter = "box";
+  const CostVolume once = FilterCostVolume(raw, guide, raw.region(), box);
+  const CostVolume twice = FilterCostVolume(once, guide, raw.region(), box);
+  const CostVolume out = FilterCostVolume(raw, guide, raw.region(), guided);
+  for (int r = 0; r < 5; ++r) {
+    for (int c = 0; c < 7; ++c) {
+      EXPECT_NEAR(out.Cost(r, c, 0), twice.Cost(r, c, 0), 3 * out.cost_step()) << r << "," << c;
+    }
+  }
+}
+
+// The point of the guided filter: a cost step that coincides with a colour edge survives (the box
+// mean smears it over the window), in grey and in colour guides.
+TEST(CostFilter, GuidedKeepsCostStepAtColourEdge) {
+  for (const int type : {CV_8UC1, CV_8UC3}) {
+    const int w = 20, h = 9;
+    cv::Mat guide(h, w, type, cv::Scalar::all(40));
+    guide(cv::Rect(10, 0, 10, h)).setTo(cv::Scalar::all(200));
+    CostVolume raw(cv::Rect(0, 0, w, h), 1, 100.0f);
+    for (int r = 0; r < h; ++r) {
+      for (int c = 0; c < w; ++c) raw.SetCost(r, c, 0, c < 10 ? 0.0f : 80.0f);
+    }
+    CostFilterOptions guided, box;
+    guided.window_px = box.window_px = 7;
+    box.filter = "box";
+    const CostVolume g = FilterCostVolume(raw, guide, raw.region(), guided);
+    const CostVolume b = FilterCostVolume(raw, guide, raw.region(), box);
+    for (int c = 7; c <= 12; ++c) {
+      const float expected = c < 10 ? 0.0f : 80.0f;
+      EXPECT_NEAR(g.Cost(4, c, 0), expected, 0.5f) << "type " << type << " col " << c;
+    }
+    EXPECT_GT(b.Cost(4, 9, 0), 20.0f);  // the box mean blurs the step
+    EXPECT_LT(b.Cost(4, 10, 0), 60.0f);
+  }
+}
+
+BirchfieldTomasiOptions CensusGuided() {
+  BirchfieldTomasiOptions options;
+  options.truncation = 60;
+  options.census_window_px = 5;
+  options.census_weight = 2;
+  options.window.window_px = 5;
+  return options;
+}
+
+// A tile's costs equal the same pixels' costs of the whole image (the filter's margin is computed
+// from the image, not from the tile), for box and guided filters.
+TEST(CostFilter, BirchfieldTomasiTileIsCropOfWholeImage) {
+  const cv::Mat left = RandomImage(30, 40, CV_8UC3, 1);
+  const cv::Mat right = RandomImage(30, 40, CV_8UC3, 2);
+  const std::vector<double> d = {0, 1, 2.5, 4, 7};
+  for (const std::string filter : {"guided", "box"}) {
+    BirchfieldTomasiOptions options = CensusGuided();
+    options.window.filter = filter;
+    const cv::Rect full(0, 0, 40, 30);
+    const CostVolume whole = ComputeBirchfieldTomasiCost(left, right, d, full, options);
+    for (const cv::Rect tile : {cv::Rect(0, 0, 13, 11), cv::Rect(9, 6, 17, 12),
+                                cv::Rect(31, 20, 9, 10), cv::Rect(3, 25, 30, 1)}) {
+      const CostVolume part = ComputeBirchfieldTomasiCost(left, right, d, tile, options);
+      ASSERT_EQ(part.max_cost(), whole.max_cost());
+      for (int r = 0; r < tile.height; ++r) {
+        for (int c = 0; c < tile.width; ++c) {
+          ASSERT_EQ(std::memcmp(part.PixelData(r, c), whole.PixelData(tile.y + r, tile.x + c),
+                                sizeof(std::uint16_t) * d.size()),
+                    0)
+              << filter << " tile (" << tile.x << "," << tile.y << ") pixel " << r << "," << c;
+        }
+      }
+    }
+  }
+}
+
+TEST(CostFilter, SameBytesForOneAndTwoThreads) {
+  const cv::Mat left = RandomImage(40, 50, CV_8UC3, 3);
+  const cv::Mat right = RandomImage(40, 50, CV_8UC3, 4);
+  std::vector<double> d;
+  for (int i = 0; i < 12; ++i) d.push_back(0.75 * i);
+  const cv::Rect region(4, 3, 40, 30);
+  CostVolume one, two;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = ComputeBirchfieldTomasiCost(left, right, d, region, CensusGuided());
+  }
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    two = ComputeBirchfieldTomasiCost(left, right, d, region, CensusGuided());
+  }
+  EXPECT_TRUE(SameBytes(one, two));
+}
+
+// The plane sweep with a window: tile = crop, and with window 1 the pixel-wise sweep.
+TEST(CostFilter, PlaneSweepWindowTileIsCropOfWholeImage) {
+  const int w = 36, h = 24;
+  const cv::Mat ref_image = RandomImage(h, w, CV_8UC3, 7);
+  const cv::Mat other = RandomImage(h, w, CV_8UC3, 8);
+  auto camera = [&](int index) {
+    return RectifiedSequenceCamera(1.0, (w - 1) / 2.0, (h - 1) / 2.0, 1.0, index, w, h);
+  };
+  const View reference{"ref", ref_image, camera(0)};
+  const std::vector<View> neighbors = {View{"n", other, camera(1)}};
+  const LabelSpace labels(LabelSpaceKind::kDisparity, 6, 0.0, 5.0, 1.0);
+  PlaneSweepOptions options;
+  options.window.window_px = 3;
+  const cv::Rect full(0, 0, w, h);
+  const CostVolume whole = ComputePlaneSweepCost(reference, neighbors, labels, full, options);
+  const cv::Rect tile(10, 5, 12, 9);
+  const CostVolume part = ComputePlaneSweepCost(reference, neighbors, labels, tile, options);
+  for (int r = 0; r < tile.height; ++r) {
+    for (int c = 0; c < tile.width; ++c) {
+      ASSERT_EQ(std::memcmp(part.PixelData(r, c), whole.PixelData(tile.y + r, tile.x + c),
+                            sizeof(std::uint16_t) * 6),
+                0);
+    }
+  }
+  // A different window gives a different volume (the option is wired through).
+  const CostVolume pixelwise =
+      ComputePlaneSweepCost(reference, neighbors, labels, full, PlaneSweepOptions{});
+  EXPECT_FALSE(SameBytes(pixelwise, whole));
+}
+
+TEST(CostFilter, BadOptionsNameTheKey) {
+  auto message = [](const auto& check) -> std::string {
+    try {
+      check();
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  CostFilterOptions even;
+  even.window_px = 4;
+  EXPECT_NE(message([&] { even.Check("cost."); }).find("cost.window_px"), std::string::npos);
+  EXPECT_NE(message([&] { even.Check("cost.sweep_"); }).find("cost.sweep_window_px"),
+            std::string::npos);
+  CostFilterOptions filter;
+  filter.filter = "median";
+  EXPECT_NE(message([&] { filter.Check(); }).find("cost.window_filter"), std::string::npos);
+  CostFilterOptions epsilon;
+  epsilon.guided_epsilon = 0;
+  EXPECT_NE(message([&] { epsilon.Check(); }).find("cost.guided_epsilon"), std::string::npos);
+
+  BirchfieldTomasiOptions bt;
+  bt.window.window_px = 0;
+  EXPECT_NE(message([&] { bt.Check(); }).find("cost.window_px"), std::string::npos);
+  PlaneSweepOptions sweep;
+  sweep.window.filter = "gauss";
+  EXPECT_NE(message([&] { sweep.Check(); }).find("cost.sweep_window_filter"), std::string::npos);
+  EXPECT_NE(message([&] { sweep.Check(); }).find("gauss"), std::string::npos);
+}
+
+TEST(CostFilter, RegionOutsideTheVolumeThrows) {
+  CostVolume raw(cv::Rect(0, 0, 4, 4), 1, 10.0f);
+  const cv::Mat guide(4, 4, CV_8UC1, cv::Scalar(0));
+  CostFilterOptions options;
+  options.window_px = 3;
+  try {
+    FilterCostVolume(raw, guide, cv::Rect(2, 2, 4, 4), options);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not inside the cost volume's region"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace gcpstereo::cost
