@@ -106,25 +106,28 @@ void PipelineConfig::Register(config::Schema* s) {
          {"adaptive-weight cost truncation (Yoon & Kweon: 40)"});
   s->Add("gcp.stereo.sigma_px", &gcp.stereo.sigma_px, Range::AtLeast(0.0),
          {"standard deviation attributed to a stereo GCP", "px"});
-
-  s->Add("gcp.stereo.min_uniqueness_aw", &gcp.stereo.min_uniqueness_aw, Range{0.0, 1.0, true, false},
+  s->Add("gcp.stereo.min_uniqueness_aw", &gcp.stereo.min_uniqueness_aw,
+         Range{0.0, 1.0, true, false},
          {"adaptive-weight WTA uniqueness (c2 - c1) / c2 must reach this (0 = off)"});
   s->Add("gcp.stereo.min_uniqueness_ncc", &gcp.stereo.min_uniqueness_ncc,
          Range{0.0, 1.0, true, false},
          {"NCC WTA uniqueness (cost 1 - ncc) must reach this (0 = off)"});
-  s->Add("gcp.stereo.min_uniqueness_bt", &gcp.stereo.min_uniqueness_bt, Range{0.0, 1.0, true, false},
+  s->Add("gcp.stereo.min_uniqueness_bt", &gcp.stereo.min_uniqueness_bt,
+         Range{0.0, 1.0, true, false},
          {"Birchfield-Tomasi WTA uniqueness must reach this (0 = off)"});
   s->Add("gcp.stereo.min_texture_std", &gcp.stereo.min_texture_std, Range::Between(0.0, 128.0),
          {"grey-level standard deviation in the texture window must reach this (0 = off)",
           "grey levels"});
   s->Add("gcp.stereo.texture_window_px", &gcp.stereo.texture_window_px, Range::Between(3, 31),
          {"texture test window side, odd", "px"});
-  s->Add("gcp.stereo.occlusion_margin_px", &gcp.stereo.occlusion_margin_px,
-         Range::Between(-1, 50),
+  s->Add("gcp.stereo.occlusion_margin_px", &gcp.stereo.occlusion_margin_px, Range::Between(-1, 50),
          {"drop matches in or within this margin of a band occluded in the other view (-1 = off)",
           "px"});
   s->Add("gcp.stereo.value", &gcp.stereo.value, {"median", "ncc"},
          {"disparity given to a GCP: median of the three WTAs or the NCC WTA"});
+  s->Add("gcp.stereo.image_scale", &gcp.stereo_image_scale, Range{0.0, 1.0, false, true},
+         {"calibrated views: match at this fraction of the processing resolution, then map the "
+          "GCPs back (1 = full)"});
   s->Add("gcp.stereo.max_neighbors", &gcp.stereo.max_neighbors, Range::Between(1, 20),
          {"calibrated views: neighbours rectified with the reference and matched"});
   s->Add("gcp.stereo.min_confirmations", &gcp.stereo.min_confirmations, Range::Between(0, 19),
@@ -149,6 +152,24 @@ void PipelineConfig::Register(config::Schema* s) {
          {"Birchfield–Tomasi: truncation of the summed RGB dissimilarity", "grey levels"});
   s->Add("cost.bt_channels", &cost.birchfield_tomasi.channels, {"sum", "max"},
          {"Birchfield–Tomasi: combine the RGB channels by sum or max"});
+  s->Add("cost.census_window_px", &cost.birchfield_tomasi.census_window_px, Range::Between(1, 7),
+         {"rectified pair: census window side added to BT (odd; 1 = BT alone, the paper)", "px"});
+  s->Add("cost.census_weight", &cost.birchfield_tomasi.census_weight, Range::AtLeast(0.0),
+         {"rectified pair: cost of one differing census bit", "grey levels"});
+  s->Add("cost.window_px", &cost.birchfield_tomasi.window.window_px, Range::Between(1, 101),
+         {"rectified pair: aggregation window side (odd; 1 = pixel-wise, the paper)", "px"});
+  s->Add("cost.window_filter", &cost.birchfield_tomasi.window.filter, {"box", "guided"},
+         {"rectified pair: window mean (box) or edge-preserving guided filter (He et al.)"});
+  s->Add("cost.guided_epsilon", &cost.birchfield_tomasi.window.guided_epsilon,
+         Range::GreaterThan(0.0),
+         {"rectified pair: guided-filter regularisation, intensities in [0, 1]", "", "ε"});
+  s->Add("cost.sweep_window_px", &cost.plane_sweep.window.window_px, Range::Between(1, 101),
+         {"plane sweep: aggregation window side (odd; 1 = pixel-wise, the paper)", "px"});
+  s->Add("cost.sweep_window_filter", &cost.plane_sweep.window.filter, {"box", "guided"},
+         {"plane sweep: window mean (box) or edge-preserving guided filter (He et al.)"});
+  s->Add("cost.sweep_guided_epsilon", &cost.plane_sweep.window.guided_epsilon,
+         Range::GreaterThan(0.0),
+         {"plane sweep: guided-filter regularisation, intensities in [0, 1]", "", "ε"});
 
   s->Add("propagation.gamma", &propagation.gamma, Range::GreaterThan(0.0),
          {"colour bandwidth of the affinities w = exp(−|ΔRGB|/γ) (paper: 1.25; measured best: 4)",
@@ -159,7 +180,8 @@ void PipelineConfig::Register(config::Schema* s) {
          {"links weaker than this are cut (regions without a GCP are then reported unreached); 0 = "
           "none"});
   s->Add("propagation.solver", &propagation.solver, {"umfpack", "cholmod"},
-         {"sparse solver: UMFPACK on eq. 5 as in the paper, or CHOLMOD on its symmetric form"});
+         {"sparse solver: CHOLMOD on the symmetric form of eq. 5 (same solution to 1e-6, about "
+          "twice as fast), or UMFPACK on eq. 5 as in the paper"});
   s->Add("propagation.ordering", &propagation.ordering, {"nested_dissection", "solver"},
          {"fill-reducing ordering: geometric nested dissection of the grid or the solver's own"});
 
@@ -177,8 +199,7 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("optimizer.epsilon", &optimizer.energy.epsilon, Range::Between(0.0, 1.0),
          {"lower bound of the smoothness weights, eq. 4 (paper: 0.3)", "", "ε"});
   s->Add("optimizer.lambda_r", &optimizer.energy.lambda_r, Range::AtLeast(0.0),
-         {"weight of the GCP energy, eq. 8 (paper: 8)",
-          "", "λr"});
+         {"weight of the GCP energy, eq. 8 (paper: 8)", "", "λr"});
   s->Add("optimizer.gamma_d", &optimizer.energy.gamma_d, Range::GreaterThan(0.0),
          {"sharpness of the robust GCP penalty, eq. 7 (paper: 2)", "label steps", "γd"});
   s->Add("optimizer.eta", &optimizer.energy.eta, Range{0.0, 1.0, false, false},
@@ -207,6 +228,9 @@ void PipelineConfig::Register(config::Schema* s) {
          {"skip α-moves that cannot find a different cut (exact)"});
   s->Add("optimizer.prune_pixels", &optimizer.expansion.prune_pixels,
          {"leave out of a move pixels that provably keep their label (exact)"});
+  s->Add("optimizer.retry_changed_blocks_only", &optimizer.expansion.retry_changed_blocks_only,
+         {"when a label comes round again, try it only near blocks that changed since its last "
+          "try (approximation; energy gap measured by the optimize benchmark)"});
   s->Add("optimizer.initialization", &optimizer.initialization, {"wta", "prior"},
          {"initial labelling: winner-take-all, or the propagated D̂ where it exists"});
   s->Add("optimizer.blend", &optimizer.blend, {"mean", "feather"},

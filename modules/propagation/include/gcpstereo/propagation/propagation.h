@@ -30,8 +30,10 @@ struct PropagationOptions {
   // Sparse direct solver: "umfpack" (LU of eq. 5 as written, as in the paper) or "cholmod"
   // (Cholesky of the equivalent symmetric positive definite form: every non-GCP row of eq. 5 times
   // Σ_q w_pq is a row of the weighted graph Laplacian, and the GCP unknowns are eliminated — the
-  // same solution, see propagation.cc). Key propagation.solver.
-  std::string solver = "umfpack";
+  // same solution, see propagation.cc). Key propagation.solver. Default CHOLMOD: the two agree
+  // to 1e-6 (tests), and on fountain-P11 at 1536×1024 (1.57 M unknowns) CHOLMOD solved in 9.0 s
+  // against UMFPACK's 16.3 s, with 1.7 GB peak instead of 2.5 GB.
+  std::string solver = "cholmod";
   // Fill-reducing elimination order: "nested_dissection" (geometric nested dissection of the pixel
   // grid, computed here in O(n)) or "amd" (the backend's own approximate minimum degree). Same
   // solution, different speed (see tools/benchmarks/propagation_benchmark.cpp). Not in the paper.
