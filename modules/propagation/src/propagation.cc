@@ -165,8 +165,10 @@ void PropagationOptions::Check() const {
   }
 }
 
-PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
-                            const PropagationOptions& options) {
+namespace {
+
+PropagationResult PropagateWith(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
+                                const PropagationOptions& options) {
   options.Check();
   if (image_bgr.empty() || image_bgr.type() != CV_8UC3) {
     throw Error("Propagate: the image must be a non-empty CV_8UC3 (BGR) image");
@@ -342,6 +344,30 @@ PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_valu
     }
   }
   return result;
+}
+
+}  // namespace
+
+PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
+                            const PropagationOptions& options) {
+  if (ParseSparseSolverKind(options.solver) != SparseSolverKind::kCholmod) {
+    return PropagateWith(image_bgr, sparse_values, options);
+  }
+  try {
+    return PropagateWith(image_bgr, sparse_values, options);
+  } catch (const Error& e) {
+    // L_UU is positive definite in exact arithmetic when every region holds a GCP, but a region
+    // tied to its GCPs only by links of w ≈ exp(−‖ΔRGB‖/γ) ~ 1e-48 (a bright speck on black) can
+    // lose definiteness in rounding. UMFPACK (LU with pivoting) solves such systems; its solution
+    // is the same where both succeed (tests), so fall back to it and say so in `solver`.
+    const std::string what = e.what();
+    if (what.find("not positive definite") == std::string::npos) throw;
+    PropagationOptions lu = options;
+    lu.solver = "umfpack";
+    PropagationResult result = PropagateWith(image_bgr, sparse_values, lu);
+    result.solver = "umfpack (fallback: " + what + ")";
+    return result;
+  }
 }
 
 }  // namespace gcpstereo::propagation

@@ -54,7 +54,8 @@ struct PropagationResult {
   double setup_seconds = 0.0;     // weights, regions and matrix assembly
   double solve_seconds = 0.0;     // factorisation and solve
   double residual = 0.0;  // max_p |x_p − Σ_q α_pq x_q| over solved non-GCP pixels (eq. 5)
-  std::string solver;     // the backend that was used
+  std::string solver;     // the backend that was used ("umfpack (fallback: …)" when CHOLMOD
+                          // failed numerically and UMFPACK solved the system instead)
 };
 
 // Adaptive disparity propagation (Wang & Yang, CVPR 2011, §3.1, eq. 5).
