@@ -11,6 +11,7 @@
 #include "gcpstereo/core/logging.h"
 #include "gcpstereo/gcp/calibrated_stereo_gcps.h"
 #include "gcpstereo/gcp/gcp_sources.h"
+#include "gcpstereo/gcp/lidar_holdout.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
 #include "gcpstereo/io/image_io.h"
 #include "gcpstereo/io/pfm.h"
@@ -108,50 +109,19 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
     if (source == "lidar") {
       PointCloud cloud = io::ReadPointCloud(config.gcp.lidar_path);
       if (config.eval.lidar_holdout) {
-        // Checkerboard split of the projected scan (eval module's documented pattern): GCP blocks
-        // feed the GCPs; the other blocks are kept to score the result.
-        const auto projected = eval::ProjectPointCloud(cloud, reference, dataset.world_from_lidar,
-                                                       /*keep_nearest_per_pixel=*/true);
-        std::vector<Eigen::Vector2d> pixels;
-        pixels.reserve(projected.size());
-        for (const auto& p : projected) pixels.push_back(p.pixel);
-        const eval::LidarSplit split =
-            eval::CheckerboardSplit(pixels, config.eval.holdout_block_px);
-        PointCloud gcp_part;
-        for (int i : split.gcp_indices) {
-          const int k = projected[i].index;
-          gcp_part.points.push_back(cloud.points[k]);
-          if (!cloud.sigma.empty()) gcp_part.sigma.push_back(cloud.sigma[k]);
-        }
+        // Checkerboard split: GCP blocks feed the GCPs; the visible points of the other blocks
+        // score the result (gcp::SplitScanForHoldout).
         result.holdout_in_disparity = dataset.rectified;
-        // A scored point must be ground truth for the camera's depth map: it has to pass the same
-        // visibility test as a GCP (z-buffer + depth consistency) against the FULL scan. Points
-        // the scanner saw but the camera does not (behind a nearer surface, seen from the
-        // scanner's other viewpoint) are not scored; their count goes into the report.
-        const GcpSet visible =
-            gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference, config.gcp.lidar);
-        cv::Mat visible_depth(height, width, CV_64F, cv::Scalar(0.0));
-        for (const Gcp& g : visible.points) visible_depth.at<double>(g.row, g.col) = g.depth;
-        for (int i : split.score_indices) {
-          const auto& p = projected[i];
-          if (p.pixel.x() < -0.5 || p.pixel.y() < -0.5 || p.pixel.x() >= width - 0.5 ||
-              p.pixel.y() >= height - 0.5) {
-            continue;
-          }
-          const int c = static_cast<int>(std::floor(p.pixel.x() + 0.5));
-          const int r = static_cast<int>(std::floor(p.pixel.y() + 0.5));
-          if (std::abs(visible_depth.at<double>(r, c) - p.depth) > 1e-6 * p.depth) {
-            ++result.lidar_holdout_not_visible;
-            continue;
-          }
-          const double value = dataset.rectified ? dataset.disparity_numerator / p.depth : p.depth;
-          result.lidar_holdout.push_back({p.pixel, value});
-        }
+        gcp::LidarHoldout holdout = gcp::SplitScanForHoldout(
+            cloud, dataset.world_from_lidar, reference, config.gcp.lidar,
+            config.eval.holdout_block_px, dataset.rectified ? dataset.disparity_numerator : 0.0);
+        result.lidar_holdout = std::move(holdout.scored);
+        result.lidar_holdout_not_visible = holdout.not_visible;
         spdlog::info(
             "LiDAR hold-out: {} points as GCP candidates, {} points for scoring ({} held-out "
             "points not visible from the camera are not scored)",
-            gcp_part.size(), result.lidar_holdout.size(), result.lidar_holdout_not_visible);
-        cloud = std::move(gcp_part);
+            holdout.gcp_part.size(), result.lidar_holdout.size(), holdout.not_visible);
+        cloud = std::move(holdout.gcp_part);
       }
       sets.push_back(gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference,
                                              config.gcp.lidar, &summary));

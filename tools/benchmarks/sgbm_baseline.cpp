@@ -24,7 +24,8 @@
 // ground-truth convention when the pair is the ground-truth pair (Middlebury im2/im6, col3/col4,
 // view1/view5; KITTI left/right).
 // With --lidar-holdout (kitti_raw), the frame's Velodyne scan is projected and split exactly as
-// `gcpstereo run … --set eval.lidar_holdout=true` does (8×8 checkerboard, eval::CheckerboardSplit)
+// `gcpstereo run … --set eval.lidar_holdout=true` does (gcp::SplitScanForHoldout: 8×8 checkerboard,
+// visible points only)
 // and SGBM is scored on the held-out points (KITTI-style bad-3, bad-1), so its numbers compare
 // one to one with the pipeline's metrics.lidar_holdout.result.
 // With --filled-output, a second map is written whose invalid pixels are filled as the KITTI
@@ -49,6 +50,7 @@
 #include "gcpstereo/core/system.h"
 #include "gcpstereo/core/types.h"
 #include "gcpstereo/eval/lidar.h"
+#include "gcpstereo/gcp/lidar_holdout.h"
 #include "gcpstereo/io/atomic_file.h"
 #include "gcpstereo/io/dataset_io.h"
 #include "gcpstereo/io/image_io.h"
@@ -321,27 +323,16 @@ int Main(int argc, char** argv) {
   if (!filled.empty()) report["filled_output"] = a.filled_output_path;
 
   if (a.lidar_holdout) {
-    // The same steps as the pipeline's GCP stage (pipeline/src/gcp_stage.cc) with
-    // eval.lidar_holdout = true: nearest point per pixel, checkerboard split, the odd blocks
-    // scored, in disparity = numerator / depth.
+    // The same split as `gcpstereo run --set eval.lidar_holdout=true` (gcp::SplitScanForHoldout
+    // with the default gcp.lidar.* options, as in configs/kitti_lidar.yaml): the visible points of
+    // the scoring blocks, in disparity = numerator / depth.
     const std::string scan_path = gcpstereo::io::KittiVelodynePath(a.dataset_path, a.reference);
     const gcpstereo::PointCloud cloud = gcpstereo::io::ReadPointCloud(scan_path);
-    const auto projected = gcpstereo::eval::ProjectPointCloud(
-        cloud, dataset.reference.camera, dataset.world_from_lidar, /*keep_nearest_per_pixel=*/true);
-    std::vector<Eigen::Vector2d> pixels;
-    pixels.reserve(projected.size());
-    for (const auto& p : projected) pixels.push_back(p.pixel);
-    const gcpstereo::eval::LidarSplit split =
-        gcpstereo::eval::CheckerboardSplit(pixels, a.holdout_block_px);
-    std::vector<gcpstereo::eval::ReferencePoint> held_out;
-    for (int i : split.score_indices) {
-      const auto& p = projected[i];
-      if (p.pixel.x() < -0.5 || p.pixel.y() < -0.5 || p.pixel.x() >= left.cols - 0.5 ||
-          p.pixel.y() >= left.rows - 0.5) {
-        continue;
-      }
-      held_out.push_back({p.pixel, dataset.disparity_numerator / p.depth});
-    }
+    const std::vector<gcpstereo::eval::ReferencePoint> held_out =
+        gcpstereo::gcp::SplitScanForHoldout(
+            cloud, dataset.world_from_lidar, dataset.reference.camera,
+            gcpstereo::gcp::LidarGcpOptions{}, a.holdout_block_px, dataset.disparity_numerator)
+            .scored;
     report["lidar_holdout"] = {
         {"scan", scan_path},
         {"block_px", a.holdout_block_px},
