@@ -210,6 +210,8 @@ void PipelineConfig::Register(config::Schema* s) {
          {"scale of the matching costs in the energy"});
   s->Add("optimizer.use_gcp_energy", &optimizer.energy.use_gcp_energy,
          {"include E_gcp (false = the paper's baseline D, even with GCPs configured)"});
+  s->Add("optimizer.prior_radius_px", &optimizer.prior_radius_px, Range::AtLeast(0.0),
+         {"E_gcp only within this distance of a GCP (0 = everywhere, the paper)", "px"});
   s->Add("optimizer.max_cycles", &optimizer.expansion.max_cycles, Range::AtLeast(1),
          {"maximum α-expansion cycles over all labels"});
   s->Add("optimizer.convergence_tolerance", &optimizer.expansion.convergence_tolerance,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <future>
 #include <limits>
@@ -268,6 +269,23 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     return finish({});
   }
 
+  // The prior of the GCP energy: D̂, optionally only within optimizer.prior_radius_px of a GCP.
+  cv::Mat energy_prior = prior;
+  double prior_percent =
+      prior.empty() ? 0.0 : 100.0 * cv::countNonZero(prior == prior) / size.area();
+  if (!prior.empty() && options.optimizer.prior_radius_px > 0.0) {
+    cv::Mat not_gcp(size, CV_8U, cv::Scalar(255));
+    for (const Gcp& g : gcps.points) not_gcp.at<std::uint8_t>(g.row, g.col) = 0;
+    cv::Mat distance_px;
+    cv::distanceTransform(not_gcp, distance_px, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    energy_prior = prior.clone();
+    const cv::Mat far = distance_px > options.optimizer.prior_radius_px;
+    energy_prior.setTo(std::numeric_limits<float>::quiet_NaN(), far);
+    prior_percent = 100.0 * cv::countNonZero(energy_prior == energy_prior) / size.area();
+    spdlog::info("GCP energy on {:.1f} % of the pixels (within {} px of a GCP)", prior_percent,
+                 options.optimizer.prior_radius_px);
+  }
+
   // 4–5. Matching costs and global optimisation, tile by tile (memory follows the tile).
   const std::string cost_method =
       options.cost.method != "auto"
@@ -305,7 +323,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                                                  options.cost.plane_sweep);
     }
     problem.image = reference.image(region).clone();
-    if (use_gcp_energy) problem.prior = prior(region).clone();
+    if (use_gcp_energy) problem.prior = energy_prior(region).clone();
     return problem;
   };
   optimize::TiledResult optimized;
@@ -367,6 +385,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   optimize_clock.Done({{"method", options.optimizer.method},
                        {"cost_method", cost_method},
                        {"gcp_energy", use_gcp_energy},
+                       {"gcp_energy_pixels_percent", use_gcp_energy ? prior_percent : 0.0},
                        {"tiles", tiles},
                        {"energy_sum", optimized.energy_sum}});
 

@@ -119,6 +119,18 @@ TEST_F(TinyScene, LidarHoldoutScoresOnlyVisiblePoints) {
   EXPECT_TRUE(fs::exists(fs::path(*dir_) / "holdout" / "error_holdout.png"));
 }
 
+// optimizer.prior_radius_px keeps E_gcp near the GCPs only (one GCP per 8×8 block here).
+TEST_F(TinyScene, PriorRadiusLimitsTheGcpEnergyToPixelsNearGcps) {
+  const nlohmann::json everywhere = Run({}, "radius0");
+  const nlohmann::json near = Run({"optimizer.prior_radius_px=1.5"}, "radius1");
+  const double all = everywhere["stages"]["cost_and_optimization"]["gcp_energy_pixels_percent"];
+  const double some = near["stages"]["cost_and_optimization"]["gcp_energy_pixels_percent"];
+  EXPECT_GT(all, 99.0);
+  // Within 1.5 px: at most the 3×3 block around each GCP, ≤ 9 of every 64 pixels.
+  EXPECT_GT(some, 1.0);
+  EXPECT_LE(some, 100.0 * 9 / 64 + 0.5);
+}
+
 TEST_F(TinyScene, BadReferenceNameFailsWithoutOutputs) {
   std::vector<std::string> overrides = Overrides();
   overrides.push_back("dataset.reference=0099");

@@ -80,6 +80,10 @@ struct OptimizerOptions {
   std::string initialization = "wta";       // wta | prior
   std::string refinement_method = "ceres";  // none | parabola | ceres
   std::string blend = "mean";               // mean | feather
+  // optimizer.prior_radius_px: E_gcp only where a GCP lies within this distance (pixels of the
+  // processing resolution); elsewhere D̂ is an extrapolation over textureless areas and the data
+  // and smoothness terms decide. 0 = everywhere (the paper). Range >= 0.
+  double prior_radius_px = 0.0;
 };
 
 // Keys of the `optimizer:` section that the pipeline itself reads.
