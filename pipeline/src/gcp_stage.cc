@@ -9,6 +9,7 @@
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
+#include "gcpstereo/core/progress.h"
 #include "gcpstereo/gcp/calibrated_stereo_gcps.h"
 #include "gcpstereo/gcp/gcp_sources.h"
 #include "gcpstereo/gcp/lidar_holdout.h"
@@ -147,8 +148,10 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       };
       std::vector<View> neighbors;
       for (const View& n : dataset.neighbors) neighbors.push_back(rescaled(n));
+      ProgressBar bar("stereo GCPs", 1000);
       gcp::CalibratedStereoGcpResult stereo = gcp::ExtractCalibratedStereoGcps(
-          rescaled(dataset.reference), neighbors, z0, z1, config.gcp.stereo);
+          rescaled(dataset.reference), neighbors, z0, z1, config.gcp.stereo, bar.AsCallback());
+      bar.Finish();
       if (scale != 1.0) {
         // Pixel-centre convention: x = (x_s + 0.5) / scale − 0.5, then the nearest pixel.
         GcpSet mapped;
@@ -180,9 +183,11 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       if (!std::isfinite(d1)) d1 = 0.0;
       const int min_disparity = static_cast<int>(std::floor(std::min(d0, d1)));
       const int max_disparity = static_cast<int>(std::ceil(std::max(d0, d1)));
+      ProgressBar bar("stereo GCPs", 1000);
       const gcp::StereoGcpResult stereo =
           gcp::ExtractStereoGcps(dataset.reference.image, pair.neighbor->image, min_disparity,
-                                 max_disparity, config.gcp.stereo);
+                                 max_disparity, config.gcp.stereo, bar.AsCallback());
+      bar.Finish();
       sets.push_back(gcp::StereoGcpsToGcpSet(stereo.disparity, pair.numerator,
                                              config.gcp.stereo.sigma_px, &summary));
       summary.source = "stereo";
