@@ -135,36 +135,10 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       double z0 = provisional_labels.DepthOfLabel(0);
       double z1 = provisional_labels.DepthOfLabel(provisional_labels.count() - 1);
       if (z0 > z1) std::swap(z0, z1);
-      // Optionally matched at a lower resolution (gcp.stereo.image_scale), then mapped back.
-      const double scale = config.gcp.stereo_image_scale;
-      auto rescaled = [scale](const View& view) {
-        if (scale == 1.0) return view;
-        View out;
-        out.name = view.name;
-        out.camera = view.camera.Rescaled(scale);
-        cv::resize(view.image, out.image, cv::Size(out.camera.width, out.camera.height), 0, 0,
-                   cv::INTER_AREA);
-        return out;
-      };
-      std::vector<View> neighbors;
-      for (const View& n : dataset.neighbors) neighbors.push_back(rescaled(n));
       ProgressBar bar("stereo GCPs", 1000);
-      gcp::CalibratedStereoGcpResult stereo = gcp::ExtractCalibratedStereoGcps(
-          rescaled(dataset.reference), neighbors, z0, z1, config.gcp.stereo, bar.AsCallback());
+      const gcp::CalibratedStereoGcpResult stereo = gcp::ExtractCalibratedStereoGcps(
+          dataset.reference, dataset.neighbors, z0, z1, config.gcp.stereo, bar.AsCallback());
       bar.Finish();
-      if (scale != 1.0) {
-        // Pixel-centre convention: x = (x_s + 0.5) / scale − 0.5, then the nearest pixel.
-        GcpSet mapped;
-        for (Gcp g : stereo.gcps.points) {
-          g.col = static_cast<int>(std::lround((g.col + 0.5) / scale - 0.5));
-          g.row = static_cast<int>(std::lround((g.row + 0.5) / scale - 0.5));
-          if (g.col < 0 || g.row < 0 || g.col >= width || g.row >= height) continue;
-          mapped.points.push_back(g);
-        }
-        stereo.gcps = std::move(mapped);
-        stereo.summary.num_gcps = static_cast<int>(stereo.gcps.size());
-        stereo.summary.density_percent = gcp::DensityPercent(stereo.gcps, width, height);
-      }
       for (const gcp::CalibratedPairSummary& p : stereo.pairs) {
         spdlog::info(
             "stereo GCPs: pair with '{}' (B = {:.4g}, f = {:.1f} px{}, d {}..{}): {} matches, {} "

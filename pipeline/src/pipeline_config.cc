@@ -125,7 +125,7 @@ void PipelineConfig::Register(config::Schema* s) {
           "px"});
   s->Add("gcp.stereo.value", &gcp.stereo.value, {"median", "ncc"},
          {"disparity given to a GCP: median of the three WTAs or the NCC WTA"});
-  s->Add("gcp.stereo.image_scale", &gcp.stereo_image_scale, Range{0.0, 1.0, false, true},
+  s->Add("gcp.stereo.image_scale", &gcp.stereo.image_scale, Range{0.0, 1.0, false, true},
          {"calibrated views: match at this fraction of the processing resolution, then map the "
           "GCPs back (1 = full)"});
   s->Add("gcp.stereo.max_neighbors", &gcp.stereo.max_neighbors, Range::Between(1, 20),

@@ -10,6 +10,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
@@ -264,6 +265,48 @@ TEST_F(CalibratedStereoGcpsTest, GcpsAreAccurateAndProjectWhereTheyShould) {
   const CalibratedStereoGcpResult unconfirmed =
       ExtractCalibratedStereoGcps(reference, neighbors, z_min, z_max, options);
   EXPECT_GE(unconfirmed.summary.num_gcps, result.summary.num_gcps);
+}
+
+// gcp.stereo.image_scale: the `small` scene (640×427) matched at a quarter of its resolution
+// gives GCPs on the full-resolution grid whose depths agree with the full-resolution truth.
+TEST(CalibratedStereoGcpsScaleTest, QuarterResolutionGcpsLandOnTheFullGrid) {
+  synth::SynthOptions synth_options;
+  synth_options.preset = "small";
+  synth_options.seed = 7;
+  const synth::SyntheticScene scene = synth::GenerateScene(synth_options);
+  const View& reference = scene.views[scene.reference_index];
+  const cv::Mat& gt = scene.depth[scene.reference_index];
+  std::vector<View> neighbors;
+  for (size_t i = 0; i < scene.views.size(); ++i) {
+    if (static_cast<int>(i) != scene.reference_index) neighbors.push_back(scene.views[i]);
+  }
+  double z_min = 0.0, z_max = 0.0;
+  cv::minMaxLoc(gt, &z_min, &z_max, nullptr, nullptr, gt < 1e30f);
+  StereoGcpOptions options;
+  options.image_scale = 0.25;
+  const CalibratedStereoGcpResult result =
+      ExtractCalibratedStereoGcps(reference, neighbors, z_min, z_max, options);
+  int evaluated = 0, outliers = 0;
+  for (const Gcp& g : result.gcps.points) {
+    ASSERT_TRUE(g.col >= 0 && g.row >= 0 && g.col < gt.cols && g.row < gt.rows);
+    // A quarter-resolution pixel covers 4×4 reference pixels: compare with the nearest truth in
+    // that footprint (depth edges move by up to 2 px).
+    double best = std::numeric_limits<double>::infinity();
+    for (int r = std::max(0, g.row - 2); r <= std::min(gt.rows - 1, g.row + 2); ++r) {
+      for (int c = std::max(0, g.col - 2); c <= std::min(gt.cols - 1, g.col + 2); ++c) {
+        const float z = gt.at<float>(r, c);
+        if (std::isfinite(z)) best = std::min(best, std::abs(g.depth - z));
+      }
+    }
+    if (!std::isfinite(best)) continue;
+    ++evaluated;
+    if (best > g.sigma / options.sigma_px) ++outliers;  // > 1 px of disparity at the match scale
+  }
+  std::printf("[ calib    ] small at 1/4: %d GCPs (%.3f %% of the full grid), outliers %d of %d\n",
+              result.summary.num_gcps, result.summary.density_percent, outliers, evaluated);
+  EXPECT_EQ(result.summary.num_gcps, static_cast<int>(result.gcps.size()));
+  EXPECT_GT(evaluated, 20);
+  EXPECT_LE(outliers, std::max(1, evaluated / 50));
 }
 
 TEST_F(CalibratedStereoGcpsTest, BadInputsThrow) {

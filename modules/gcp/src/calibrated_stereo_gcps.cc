@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include <Eigen/Dense>
 #include <opencv2/calib3d.hpp>
@@ -135,14 +136,12 @@ PairMaps MatchPair(const View& reference, const View& neighbor, double min_depth
   return maps;
 }
 
-}  // namespace
-
-CalibratedStereoGcpResult ExtractCalibratedStereoGcps(const View& reference,
-                                                      const std::vector<View>& neighbors,
-                                                      double min_depth, double max_depth,
-                                                      const StereoGcpOptions& options,
-                                                      const ProgressCallback& progress) {
-  options.Check();
+// ExtractCalibratedStereoGcps at the views' own resolution.
+CalibratedStereoGcpResult ExtractAtViewResolution(const View& reference,
+                                                  const std::vector<View>& neighbors,
+                                                  double min_depth, double max_depth,
+                                                  const StereoGcpOptions& options,
+                                                  const ProgressCallback& progress) {
   const auto start = std::chrono::steady_clock::now();
   if (neighbors.empty()) throw Error("ExtractCalibratedStereoGcps: no neighbour view");
   if (!(min_depth > 0.0) || !(max_depth > min_depth) || !std::isfinite(max_depth)) {
@@ -241,6 +240,47 @@ CalibratedStereoGcpResult ExtractCalibratedStereoGcps(const View& reference,
   summary.num_gcps = static_cast<int>(result.gcps.size());
   summary.density_percent = DensityPercent(result.gcps, width, height);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+View Rescaled(const View& view, double scale) {
+  View out;
+  out.name = view.name;
+  out.camera = view.camera.Rescaled(scale);
+  cv::resize(view.image, out.image, cv::Size(out.camera.width, out.camera.height), 0, 0,
+             cv::INTER_AREA);
+  return out;
+}
+
+}  // namespace
+
+CalibratedStereoGcpResult ExtractCalibratedStereoGcps(const View& reference,
+                                                      const std::vector<View>& neighbors,
+                                                      double min_depth, double max_depth,
+                                                      const StereoGcpOptions& options,
+                                                      const ProgressCallback& progress) {
+  options.Check();
+  const double scale = options.image_scale;
+  if (scale == 1.0) {
+    return ExtractAtViewResolution(reference, neighbors, min_depth, max_depth, options, progress);
+  }
+  std::vector<View> small_neighbors;
+  for (const View& n : neighbors) small_neighbors.push_back(Rescaled(n, scale));
+  CalibratedStereoGcpResult result = ExtractAtViewResolution(
+      Rescaled(reference, scale), small_neighbors, min_depth, max_depth, options, progress);
+  // Back to the reference grid (pixel-centre convention x = (x_s + 0.5) / scale − 0.5, nearest
+  // pixel); depth and sigma are unchanged.
+  const int width = reference.image.cols, height = reference.image.rows;
+  GcpSet mapped;
+  for (Gcp g : result.gcps.points) {
+    g.col = static_cast<int>(std::lround((g.col + 0.5) / scale - 0.5));
+    g.row = static_cast<int>(std::lround((g.row + 0.5) / scale - 0.5));
+    if (g.col < 0 || g.row < 0 || g.col >= width || g.row >= height) continue;
+    mapped.points.push_back(g);
+  }
+  result.gcps = std::move(mapped);
+  result.summary.num_gcps = static_cast<int>(result.gcps.size());
+  result.summary.density_percent = DensityPercent(result.gcps, width, height);
   return result;
 }
 

@@ -471,6 +471,8 @@ void StereoGcpOptions::Check() const {
   }
   if (!(confirm_sigma > 0.0))
     fail("confirm_sigma", FormatNumber(confirm_sigma), "confirm_sigma > 0");
+  if (!(image_scale > 0.0 && image_scale <= 1.0))
+    fail("image_scale", FormatNumber(image_scale), "0 < image_scale <= 1");
   if (value != "median" && value != "ncc") fail("value", value, "one of median, ncc");
   if (texture_window_px < 3 || texture_window_px > 31 || texture_window_px % 2 == 0) {
     fail("texture_window_px", std::to_string(texture_window_px),

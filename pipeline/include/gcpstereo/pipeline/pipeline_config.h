@@ -53,11 +53,6 @@ struct GcpOptions {
   int downsample = 16;               // s: one GCP per s×s block (paper: 16 → ≈0.4 %)
   gcp::LidarGcpOptions lidar;        // gcp.lidar.*
   gcp::StereoGcpOptions stereo;      // gcp.stereo.*
-  // gcp.stereo.image_scale: calibrated (non-rectified) views are matched at this fraction of the
-  // processing resolution and the GCPs mapped back to the reference grid (the adaptive-weight cost
-  // grows with the disparity range, so full-resolution matching of a wide-baseline set takes
-  // tens of minutes). 1 = processing resolution. Range (0, 1].
-  double stereo_image_scale = 1.0;
 };
 
 // Keys of the `cost:` section.

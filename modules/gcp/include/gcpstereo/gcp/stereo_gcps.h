@@ -89,6 +89,11 @@ struct StereoGcpOptions {
   int min_confirmations = 1;
   int confirm_radius_px = 1;
   double confirm_sigma = 3.0;
+  // Views are matched at this fraction of their resolution and the GCPs mapped back to the
+  // reference grid (the adaptive-weight cost grows with the disparity range, so full-resolution
+  // matching of a wide-baseline set takes tens of minutes). Valid: (0, 1]. Key
+  // gcp.stereo.image_scale.
+  double image_scale = 1.0;
 
   void Check() const;  // throws ConfigError naming the key
 };
