@@ -1,7 +1,6 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 // Stage 6b: evaluation against the ground truth a data set carries (dense depth + laser sigma,
 // Middlebury disparities and masks, or held-out LiDAR points), with the figures a person reads.
-#include <cmath>
 
 #include <opencv2/imgproc.hpp>
 
@@ -12,42 +11,6 @@
 namespace gcpstereo::pipeline::internal {
 
 using nlohmann::json;
-
-namespace {
-
-// The scored held-out points on the darkened reference image, coloured by the error of `map` at
-// their nearest pixel: green |e| <= 1, yellow 1 < |e| and not bad-3, red bad-3 (> 3 and > 5 %),
-// magenta no estimate. Same definitions as eval::EvaluateAgainstPoints' defaults.
-cv::Mat RenderHoldoutErrors(const cv::Mat& image_bgr, const cv::Mat& map,
-                            const std::vector<eval::ReferencePoint>& points) {
-  cv::Mat grey, out;
-  cv::cvtColor(image_bgr, grey, cv::COLOR_BGR2GRAY);
-  grey.convertTo(grey, CV_8U, 0.6);
-  cv::cvtColor(grey, out, cv::COLOR_GRAY2BGR);
-  const int radius = std::max(1, image_bgr.cols / 600);
-  const eval::LidarScoreOptions bad;
-  for (const eval::ReferencePoint& p : points) {
-    const int c = static_cast<int>(std::floor(p.pixel.x() + 0.5));
-    const int r = static_cast<int>(std::floor(p.pixel.y() + 0.5));
-    if (c < 0 || r < 0 || c >= map.cols || r >= map.rows) continue;
-    const float v = map.at<float>(r, c);
-    cv::Scalar color(255, 0, 255);  // magenta: no estimate
-    if (std::isfinite(v) && v > 0) {
-      const double e = std::abs(v - p.value);
-      if (e > bad.bad_abs_px && e > bad.bad_rel * std::abs(p.value)) {
-        color = cv::Scalar(0, 0, 255);
-      } else if (e > bad.bad1_abs_px) {
-        color = cv::Scalar(0, 220, 255);
-      } else {
-        color = cv::Scalar(0, 200, 0);
-      }
-    }
-    cv::circle(out, cv::Point(c, r), radius, color, cv::FILLED);
-  }
-  return out;
-}
-
-}  // namespace
 
 json Evaluate(const Dataset& dataset, const EvaluationInputs& inputs,
               std::vector<std::pair<std::string, cv::Mat>>* previews) {
@@ -108,9 +71,9 @@ json Evaluate(const Dataset& dataset, const EvaluationInputs& inputs,
       out[name] = eval::EvaluateAgainstPoints(map, *inputs.lidar_holdout).ToJson();
     }
     if (!maps.empty()) {
-      previews->emplace_back(
-          "error_holdout.png",
-          RenderHoldoutErrors(dataset.reference.image, maps.front().second, *inputs.lidar_holdout));
+      previews->emplace_back("error_holdout.png",
+                             eval::RenderPointErrors(dataset.reference.image, maps.front().second,
+                                                     *inputs.lidar_holdout));
     }
   }
   return metrics;

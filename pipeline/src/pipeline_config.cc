@@ -3,13 +3,31 @@
 
 #include <algorithm>
 #include <sstream>
+#include <string>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/cost/cost_filter.h"
 
 namespace gcpstereo::pipeline {
 
 using config::KeyDoc;
 using config::Range;
+
+namespace {
+
+// The keys <prefix>window_px, <prefix>window_filter, <prefix>guided_epsilon of one cost's window
+// aggregation (the names CostFilterOptions::Check(prefix) reports); `what` names the cost.
+void AddCostFilterKeys(config::Schema* s, const std::string& prefix, const std::string& what,
+                       cost::CostFilterOptions* window) {
+  s->Add(prefix + "window_px", &window->window_px, Range::Between(1, 101),
+         {what + ": aggregation window side (odd; 1 = pixel-wise, the paper)", "px"});
+  s->Add(prefix + "window_filter", &window->filter, {"box", "guided"},
+         {what + ": window mean (box) or edge-preserving guided filter (He et al.)"});
+  s->Add(prefix + "guided_epsilon", &window->guided_epsilon, Range::GreaterThan(0.0),
+         {what + ": guided-filter regularisation, intensities in [0, 1]", "", "ε"});
+}
+
+}  // namespace
 
 void PipelineConfig::Register(config::Schema* s) {
   s->Add("dataset.format", &dataset.format, {"strecha", "middlebury", "kitti_raw"},
@@ -156,20 +174,8 @@ void PipelineConfig::Register(config::Schema* s) {
          {"rectified pair: census window side added to BT (odd; 1 = BT alone, the paper)", "px"});
   s->Add("cost.census_weight", &cost.birchfield_tomasi.census_weight, Range::AtLeast(0.0),
          {"rectified pair: cost of one differing census bit", "grey levels"});
-  s->Add("cost.window_px", &cost.birchfield_tomasi.window.window_px, Range::Between(1, 101),
-         {"rectified pair: aggregation window side (odd; 1 = pixel-wise, the paper)", "px"});
-  s->Add("cost.window_filter", &cost.birchfield_tomasi.window.filter, {"box", "guided"},
-         {"rectified pair: window mean (box) or edge-preserving guided filter (He et al.)"});
-  s->Add("cost.guided_epsilon", &cost.birchfield_tomasi.window.guided_epsilon,
-         Range::GreaterThan(0.0),
-         {"rectified pair: guided-filter regularisation, intensities in [0, 1]", "", "ε"});
-  s->Add("cost.sweep_window_px", &cost.plane_sweep.window.window_px, Range::Between(1, 101),
-         {"plane sweep: aggregation window side (odd; 1 = pixel-wise, the paper)", "px"});
-  s->Add("cost.sweep_window_filter", &cost.plane_sweep.window.filter, {"box", "guided"},
-         {"plane sweep: window mean (box) or edge-preserving guided filter (He et al.)"});
-  s->Add("cost.sweep_guided_epsilon", &cost.plane_sweep.window.guided_epsilon,
-         Range::GreaterThan(0.0),
-         {"plane sweep: guided-filter regularisation, intensities in [0, 1]", "", "ε"});
+  AddCostFilterKeys(s, "cost.", "rectified pair", &cost.birchfield_tomasi.window);
+  AddCostFilterKeys(s, "cost.sweep_", "plane sweep", &cost.plane_sweep.window);
 
   s->Add("propagation.gamma", &propagation.gamma, Range::GreaterThan(0.0),
          {"colour bandwidth of the affinities w = exp(−|ΔRGB|/γ) (paper: 1.25; measured best: 4)",

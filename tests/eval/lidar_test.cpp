@@ -94,6 +94,28 @@ TEST(Lidar, KittiStyleScores) {
   EXPECT_THROW(EvaluateAgainstPoints(cv::Mat(3, 3, CV_8U), own), Error);
 }
 
+// Each point is drawn in the colour of its class, by the same definitions as the scores.
+TEST(Lidar, RenderPointErrorsColoursByClass) {
+  cv::Mat map(20, 40, CV_32F, cv::Scalar(50.0f));
+  map.at<float>(10, 30) = kNan;
+  const cv::Mat image(20, 40, CV_8UC3, cv::Scalar(100, 100, 100));
+  const std::vector<ReferencePoint> points = {
+      {{5.0, 10.0}, 50.0},   // good: green
+      {{15.0, 10.0}, 52.0},  // bad-1 only: yellow
+      {{25.0, 10.0}, 60.0},  // bad-3: red
+      {{30.0, 10.0}, 50.0},  // no estimate: magenta
+      {{50.0, 10.0}, 50.0},  // outside: not drawn
+  };
+  const cv::Mat out = RenderPointErrors(image, map, points);
+  ASSERT_EQ(out.type(), CV_8UC3);
+  EXPECT_EQ(out.at<cv::Vec3b>(10, 5), cv::Vec3b(0, 200, 0));
+  EXPECT_EQ(out.at<cv::Vec3b>(10, 15), cv::Vec3b(0, 220, 255));
+  EXPECT_EQ(out.at<cv::Vec3b>(10, 25), cv::Vec3b(0, 0, 255));
+  EXPECT_EQ(out.at<cv::Vec3b>(10, 30), cv::Vec3b(255, 0, 255));
+  EXPECT_EQ(out.at<cv::Vec3b>(2, 2), cv::Vec3b(60, 60, 60));  // the darkened image
+  EXPECT_THROW(RenderPointErrors(cv::Mat(5, 5, CV_8UC3), map, points), Error);
+}
+
 TEST(Lidar, ProjectPointCloudKeepsTheNearestPointPerPixel) {
   const Camera camera = RectifiedSequenceCamera(10.0, 4.0, 3.0, 0.1, 0, 9, 7);
   PointCloud cloud;

@@ -129,10 +129,6 @@ void MeanOfBestK(std::vector<float>& per_neighbor, int num_neighbors, int width,
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The pixel-wise sweep of `region` (ComputePlaneSweepCost without the window filter).
 CostVolume PlaneSweepPixelCost(const View& reference, const std::vector<View>& neighbors,
                                const LabelSpace& labels, const cv::Rect& region,

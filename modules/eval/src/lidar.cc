@@ -1,10 +1,12 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/eval/lidar.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "common.h"
 #include "gcpstereo/core/error.h"
@@ -112,6 +114,30 @@ nlohmann::json LidarScore::ToJson() const {
 // KITTI 2015 (Menze & Geiger, CVPR 2015) outlier rate "D1": a disparity is an outlier when its
 // error exceeds both 3 px and 5 % of the true disparity. Here the truth is the held-out half of the
 // projected LiDAR scan (see CheckerboardSplit), which never fed the GCP energy.
+namespace {
+
+// How one reference point scores against `map` (the definitions of LidarScore).
+enum class PointClass { kOutside, kInvalidReference, kMissing, kBad3, kBad1, kGood };
+PointClass ClassifyPoint(const cv::Mat& map, const ReferencePoint& p,
+                         const LidarScoreOptions& options, double* error) {
+  const std::int64_t col = NearestIndex(p.pixel.x());
+  const std::int64_t row = NearestIndex(p.pixel.y());
+  if (!std::isfinite(p.pixel.x()) || !std::isfinite(p.pixel.y()) || col < 0 || row < 0 ||
+      col >= map.cols || row >= map.rows) {
+    return PointClass::kOutside;
+  }
+  if (!std::isfinite(p.value) || p.value <= 0.0) return PointClass::kInvalidReference;
+  const float estimate = map.at<float>(static_cast<int>(row), static_cast<int>(col));
+  if (!std::isfinite(estimate) || estimate <= 0.0f) return PointClass::kMissing;
+  *error = std::abs(static_cast<double>(estimate) - p.value);
+  if (*error > options.bad_abs_px && *error > options.bad_rel * std::abs(p.value)) {
+    return PointClass::kBad3;
+  }
+  return *error > options.bad1_abs_px ? PointClass::kBad1 : PointClass::kGood;
+}
+
+}  // namespace
+
 LidarScore EvaluateAgainstPoints(const cv::Mat& map, const std::vector<ReferencePoint>& points,
                                  const LidarScoreOptions& options) {
   options.Check();
@@ -120,33 +146,28 @@ LidarScore EvaluateAgainstPoints(const cv::Mat& map, const std::vector<Reference
   double sum_abs = 0.0, sum_sq = 0.0;
   std::int64_t valid = 0;
   for (const ReferencePoint& p : points) {
-    const std::int64_t col = NearestIndex(p.pixel.x());
-    const std::int64_t row = NearestIndex(p.pixel.y());
-    if (!std::isfinite(p.pixel.x()) || !std::isfinite(p.pixel.y()) || col < 0 || row < 0 ||
-        col >= map.cols || row >= map.rows) {
+    double error = 0.0;
+    const PointClass c = ClassifyPoint(map, p, options, &error);
+    if (c == PointClass::kOutside) {
       ++score.outside;
       continue;
     }
-    if (!std::isfinite(p.value) || p.value <= 0.0) {
+    if (c == PointClass::kInvalidReference) {
       ++score.invalid_reference;
       continue;
     }
     ++score.counted;
-    const float estimate = map.at<float>(static_cast<int>(row), static_cast<int>(col));
-    if (!std::isfinite(estimate) || estimate <= 0.0f) {
+    if (c == PointClass::kMissing) {
       ++score.missing;
       ++score.bad3_count;
       ++score.bad1_count;
       continue;
     }
-    const double error = std::abs(static_cast<double>(estimate) - p.value);
     ++valid;
     sum_abs += error;
     sum_sq += error * error;
-    if (error > options.bad_abs_px && error > options.bad_rel * std::abs(p.value)) {
-      ++score.bad3_count;
-    }
-    if (error > options.bad1_abs_px) ++score.bad1_count;
+    if (c == PointClass::kBad3) ++score.bad3_count;
+    if (c == PointClass::kBad3 || c == PointClass::kBad1) ++score.bad1_count;
   }
   score.bad3_percent = internal::Percent(score.bad3_count, score.counted);
   score.bad1_percent = internal::Percent(score.bad1_count, score.counted);
@@ -155,6 +176,47 @@ LidarScore EvaluateAgainstPoints(const cv::Mat& map, const std::vector<Reference
     score.rms_error = std::sqrt(sum_sq / valid);
   }
   return score;
+}
+
+cv::Mat RenderPointErrors(const cv::Mat& image_bgr, const cv::Mat& map,
+                          const std::vector<ReferencePoint>& points,
+                          const LidarScoreOptions& options) {
+  options.Check();
+  internal::CheckFloatMap(map, "evaluated map");
+  if (image_bgr.type() != CV_8UC3 || image_bgr.size() != map.size()) {
+    throw Error("RenderPointErrors: the image must be CV_8UC3 of the map's size");
+  }
+  cv::Mat grey, out;
+  cv::cvtColor(image_bgr, grey, cv::COLOR_BGR2GRAY);
+  grey.convertTo(grey, CV_8U, 0.6);
+  cv::cvtColor(grey, out, cv::COLOR_GRAY2BGR);
+  const int radius = std::max(1, image_bgr.cols / 600);
+  for (const ReferencePoint& p : points) {
+    double error = 0.0;
+    cv::Scalar color;
+    switch (ClassifyPoint(map, p, options, &error)) {
+      case PointClass::kOutside:
+      case PointClass::kInvalidReference:
+        continue;
+      case PointClass::kMissing:
+        color = cv::Scalar(255, 0, 255);  // magenta
+        break;
+      case PointClass::kBad3:
+        color = cv::Scalar(0, 0, 255);  // red
+        break;
+      case PointClass::kBad1:
+        color = cv::Scalar(0, 220, 255);  // yellow
+        break;
+      case PointClass::kGood:
+        color = cv::Scalar(0, 200, 0);  // green
+        break;
+    }
+    cv::circle(out,
+               cv::Point(static_cast<int>(NearestIndex(p.pixel.x())),
+                         static_cast<int>(NearestIndex(p.pixel.y()))),
+               radius, color, cv::FILLED);
+  }
+  return out;
 }
 
 }  // namespace gcpstereo::eval

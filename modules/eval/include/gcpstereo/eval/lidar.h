@@ -92,4 +92,11 @@ struct LidarScore {
 LidarScore EvaluateAgainstPoints(const cv::Mat& map, const std::vector<ReferencePoint>& points,
                                  const LidarScoreOptions& options = {});
 
+// The reference points on the darkened reference image, coloured by the same definitions: green
+// |e| <= bad1_abs_px, yellow bad-1 only, red bad-3, magenta no estimate (outside / invalid
+// reference points are not drawn). image_bgr: CV_8UC3 of the map's size. Throws Error otherwise.
+cv::Mat RenderPointErrors(const cv::Mat& image_bgr, const cv::Mat& map,
+                          const std::vector<ReferencePoint>& points,
+                          const LidarScoreOptions& options = {});
+
 }  // namespace gcpstereo::eval
