@@ -218,6 +218,14 @@ void PipelineConfig::Register(config::Schema* s) {
          {"include E_gcp (false = the paper's baseline D, even with GCPs configured)"});
   s->Add("optimizer.prior_radius_px", &optimizer.prior_radius_px, Range::AtLeast(0.0),
          {"E_gcp only within this distance of a GCP (0 = everywhere, the paper)", "px"});
+  s->Add("optimizer.left_right_check", &optimizer.left_right_check,
+         {"rectified pairs: solve again with the neighbour as reference and fill the pixels whose "
+          "disparities disagree from the background side of their row (doubles the optimisation "
+          "time)"});
+  s->Add(
+      "optimizer.left_right_max_difference_px", &optimizer.left_right_max_difference_px,
+      Range::AtLeast(0.0),
+      {"largest disparity difference between the two views that still counts as consistent", "px"});
   s->Add("optimizer.max_cycles", &optimizer.expansion.max_cycles, Range::AtLeast(1),
          {"maximum α-expansion cycles over all labels"});
   s->Add("optimizer.convergence_tolerance", &optimizer.expansion.convergence_tolerance,

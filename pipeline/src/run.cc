@@ -31,6 +31,7 @@
 #include "gcpstereo/io/preview.h"
 #include "gcpstereo/mesh/meshing.h"
 #include "gcpstereo/mesh/render.h"
+#include "gcpstereo/optimize/left_right.h"
 #include "gcpstereo/optimize/tiling.h"
 #include "gcpstereo/pipeline/output_folder.h"
 #include "gcpstereo/propagation/propagation.h"
@@ -83,6 +84,57 @@ optimize::ExpansionOptions ExpansionOptionsOf(const PipelineConfig& options) {
   return expansion;
 }
 
+// D̂ restricted to within `radius_px` of a GCP pixel (NaN farther away); radius 0 = unchanged.
+cv::Mat PriorNearGcps(const cv::Mat& prior, const std::vector<cv::Point>& gcp_pixels,
+                      double radius_px) {
+  if (prior.empty() || radius_px <= 0.0) return prior;
+  cv::Mat not_gcp(prior.size(), CV_8U, cv::Scalar(255));
+  for (const cv::Point& p : gcp_pixels) not_gcp.at<std::uint8_t>(p) = 0;
+  cv::Mat distance_px;
+  cv::distanceTransform(not_gcp, distance_px, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::Mat near = prior.clone();
+  near.setTo(std::numeric_limits<float>::quiet_NaN(), distance_px > radius_px);
+  return near;
+}
+
+// The GCPs seen from the other image of a rectified pair, mirrored left-right so that the pair's
+// disparity convention holds with that image as reference (see the left-right check in
+// RunPipeline): a GCP at (col, row) with disparity d lies at (col − d, row) in the other image and
+// at width − 1 − (col − d) in its mirror. Where two land on one pixel the nearer one is kept.
+// Values are labels (NaN elsewhere); `pixels` receives the occupied pixels.
+cv::Mat MirroredPartnerGcpLabels(const GcpSet& gcps, const LabelSpace& labels, cv::Size size,
+                                 double numerator, std::vector<cv::Point>* pixels) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cv::Mat sparse(size, CV_32F, cv::Scalar(nan));
+  cv::Mat disparity(size, CV_32F, cv::Scalar(-1.0f));
+  for (const Gcp& g : gcps.points) {
+    if (!(g.depth > 0) || !std::isfinite(g.depth)) continue;
+    const double d = numerator / g.depth;
+    const long col = size.width - 1 - std::lround(g.col - d);
+    if (g.row < 0 || g.row >= size.height || col < 0 || col >= size.width) continue;
+    const double label = labels.LabelOfDepth(g.depth);
+    if (!std::isfinite(label) || d <= disparity.at<float>(g.row, col)) continue;
+    disparity.at<float>(g.row, col) = static_cast<float>(d);
+    sparse.at<float>(g.row, col) = static_cast<float>(label);
+  }
+  pixels->clear();
+  for (int r = 0; r < size.height; ++r) {
+    for (int c = 0; c < size.width; ++c) {
+      if (!std::isnan(sparse.at<float>(r, c))) pixels->emplace_back(c, r);
+    }
+  }
+  return sparse;
+}
+
+// The reference image in grey with the pixels that failed the left-right check in red.
+cv::Mat RenderInconsistent(const cv::Mat& image_bgr, const cv::Mat& consistent) {
+  cv::Mat grey, picture;
+  cv::cvtColor(image_bgr, grey, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(grey, picture, cv::COLOR_GRAY2BGR);
+  picture.setTo(cv::Scalar(0, 0, 255), consistent == 0);
+  return picture;
+}
+
 }  // namespace
 
 RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir,
@@ -129,6 +181,17 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                dataset.neighbors.size());
   if (dataset.neighbors.empty()) {
     throw ConfigError("dataset.neighbors: no neighbour view to match the reference against");
+  }
+  const std::string cost_method =
+      options.cost.method != "auto"
+          ? options.cost.method
+          : (dataset.rectified && dataset.neighbors.size() == 1 ? "birchfield_tomasi"
+                                                                : "plane_sweep");
+  if (options.optimizer.left_right_check && cost_method != "birchfield_tomasi") {
+    throw ConfigError(
+        "optimizer.left_right_check = true needs a rectified pair matched with cost.method = "
+        "birchfield_tomasi (here: " +
+        cost_method + ")");
   }
   load_clock.Done();
 
@@ -270,28 +333,17 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   }
 
   // The prior of the GCP energy: D̂, optionally only within optimizer.prior_radius_px of a GCP.
-  cv::Mat energy_prior = prior;
-  double prior_percent =
-      prior.empty() ? 0.0 : 100.0 * cv::countNonZero(prior == prior) / size.area();
+  std::vector<cv::Point> gcp_pixels;
+  for (const Gcp& g : gcps.points) gcp_pixels.emplace_back(g.col, g.row);
+  const cv::Mat energy_prior = PriorNearGcps(prior, gcp_pixels, options.optimizer.prior_radius_px);
+  const double prior_percent =
+      prior.empty() ? 0.0 : 100.0 * cv::countNonZero(energy_prior == energy_prior) / size.area();
   if (!prior.empty() && options.optimizer.prior_radius_px > 0.0) {
-    cv::Mat not_gcp(size, CV_8U, cv::Scalar(255));
-    for (const Gcp& g : gcps.points) not_gcp.at<std::uint8_t>(g.row, g.col) = 0;
-    cv::Mat distance_px;
-    cv::distanceTransform(not_gcp, distance_px, cv::DIST_L2, cv::DIST_MASK_PRECISE);
-    energy_prior = prior.clone();
-    const cv::Mat far = distance_px > options.optimizer.prior_radius_px;
-    energy_prior.setTo(std::numeric_limits<float>::quiet_NaN(), far);
-    prior_percent = 100.0 * cv::countNonZero(energy_prior == energy_prior) / size.area();
     spdlog::info("GCP energy on {:.1f} % of the pixels (within {} px of a GCP)", prior_percent,
                  options.optimizer.prior_radius_px);
   }
 
   // 4–5. Matching costs and global optimisation, tile by tile (memory follows the tile).
-  const std::string cost_method =
-      options.cost.method != "auto"
-          ? options.cost.method
-          : (dataset.rectified && dataset.neighbors.size() == 1 ? "birchfield_tomasi"
-                                                                : "plane_sweep");
   std::vector<double> pair_disparities;
   const View* pair_neighbor = nullptr;
   if (cost_method == "birchfield_tomasi") {
@@ -326,36 +378,42 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     if (use_gcp_energy) problem.prior = energy_prior(region).clone();
     return problem;
   };
-  optimize::TiledResult optimized;
-  if (options.optimizer.method == "wta") {
-    // Winner-take-all per tile: the same tiling and cost code, no energy minimisation.
-    optimized.labels = cv::Mat(size, CV_32F, cv::Scalar(0));
-    cv::Mat weight(size, CV_32F, cv::Scalar(0));
-    for (const cv::Rect& region : optimize::TileLayout(size, tiling)) {
-      optimize::OwnedMrfProblem problem = make_problem(region);
-      cv::Mat labels = cost::WinnerTakeAll(problem.data);
-      cv::Mat float_labels;
-      labels.convertTo(float_labels, CV_32F);
-      float_labels.setTo(std::numeric_limits<float>::quiet_NaN(), labels < 0);
-      // Overlaps: the mean, as the graph-cut merge does.
-      cv::Mat target = optimized.labels(region), w = weight(region);
-      for (int r = 0; r < region.height; ++r) {
-        for (int c = 0; c < region.width; ++c) {
-          const float v = float_labels.at<float>(r, c);
-          if (std::isnan(v)) continue;
-          target.at<float>(r, c) += v;
-          w.at<float>(r, c) += 1.0f;
+  // Winner-take-all or graph cuts over the tiles of one view's problem.
+  auto optimize_view = [&](const optimize::MakeTileProblem& make_view_problem,
+                           const std::string& progress_title) {
+    optimize::TiledResult optimized;
+    if (options.optimizer.method == "wta") {
+      // Winner-take-all per tile: the same tiling and cost code, no energy minimisation.
+      optimized.labels = cv::Mat(size, CV_32F, cv::Scalar(0));
+      cv::Mat weight(size, CV_32F, cv::Scalar(0));
+      for (const cv::Rect& region : optimize::TileLayout(size, tiling)) {
+        optimize::OwnedMrfProblem problem = make_view_problem(region);
+        cv::Mat labels = cost::WinnerTakeAll(problem.data);
+        cv::Mat float_labels;
+        labels.convertTo(float_labels, CV_32F);
+        float_labels.setTo(std::numeric_limits<float>::quiet_NaN(), labels < 0);
+        // Overlaps: the mean, as the graph-cut merge does.
+        cv::Mat target = optimized.labels(region), w = weight(region);
+        for (int r = 0; r < region.height; ++r) {
+          for (int c = 0; c < region.width; ++c) {
+            const float v = float_labels.at<float>(r, c);
+            if (std::isnan(v)) continue;
+            target.at<float>(r, c) += v;
+            w.at<float>(r, c) += 1.0f;
+          }
         }
       }
+      optimized.labels /= weight;  // 0/0 = NaN where no tile had data: no estimate
+    } else {
+      ProgressBar bar(progress_title, 1000);
+      optimize::RefinementOptions refinement = options.optimizer.refinement;
+      refinement.method = optimize::ParseRefinementMethod(options.optimizer.refinement_method);
+      optimized = optimize::OptimizeTiled(size, make_view_problem, energy, expansion, tiling, {},
+                                          bar.AsCallback(), refinement);
     }
-    optimized.labels /= weight;  // 0/0 = NaN where no tile had data: no estimate
-  } else {
-    ProgressBar bar("graph cuts", 1000);
-    optimize::RefinementOptions refinement = options.optimizer.refinement;
-    refinement.method = optimize::ParseRefinementMethod(options.optimizer.refinement_method);
-    optimized = optimize::OptimizeTiled(size, make_problem, energy, expansion, tiling, {},
-                                        bar.AsCallback(), refinement);
-  }
+    return optimized;
+  };
+  optimize::TiledResult optimized = optimize_view(make_problem, "graph cuts");
   json tiles = json::array();
   for (const auto& tile : optimized.tiles) {
     const auto& e = tile.expansion;
@@ -388,6 +446,62 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                        {"gcp_energy_pixels_percent", use_gcp_energy ? prior_percent : 0.0},
                        {"tiles", tiles},
                        {"energy_sum", optimized.energy_sum}});
+
+  // 5b. Left-right check (optimizer.left_right_check, rectified pairs): the same problem with the
+  // neighbour as reference, solved on mirrored images so that every cost and GCP routine keeps
+  // its disparity convention; pixels whose two disparities disagree are filled from the
+  // background side of their row (optimize/left_right.h).
+  cv::Mat inconsistent_preview;
+  if (options.optimizer.left_right_check) {
+    StageClock clock(&stages, "left_right_check");
+    cv::Mat mirrored_reference, mirrored_neighbor;
+    cv::flip(pair_neighbor->image, mirrored_reference, 1);
+    cv::flip(reference.image, mirrored_neighbor, 1);
+    cv::Mat mirrored_prior;
+    std::vector<cv::Point> mirrored_gcp_pixels;
+    if (use_gcp_energy) {
+      const cv::Mat sparse = MirroredPartnerGcpLabels(
+          gcps, labels, size, dataset.disparity_numerator, &mirrored_gcp_pixels);
+      mirrored_prior = PriorNearGcps(
+          propagation::Propagate(mirrored_reference, sparse, options.propagation).values,
+          mirrored_gcp_pixels, options.optimizer.prior_radius_px);
+    }
+    auto make_mirrored_problem = [&](const cv::Rect& region) {
+      optimize::OwnedMrfProblem problem;
+      problem.data =
+          cost::ComputeBirchfieldTomasiCost(mirrored_reference, mirrored_neighbor, pair_disparities,
+                                            region, options.cost.birchfield_tomasi);
+      problem.image = mirrored_reference(region).clone();
+      if (use_gcp_energy) problem.prior = mirrored_prior(region).clone();
+      return problem;
+    };
+    const optimize::TiledResult partner =
+        optimize_view(make_mirrored_problem, "graph cuts, right view");
+    cv::Mat partner_labels;
+    cv::flip(partner.labels, partner_labels, 1);
+    const cv::Mat partner_disparity =
+        internal::LabelMapToDisparity(partner_labels, labels, dataset.disparity_numerator);
+    cv::Mat own_disparity =
+        internal::LabelMapToDisparity(optimized.labels, labels, dataset.disparity_numerator);
+    const cv::Mat consistent = optimize::LeftRightConsistent(
+        own_disparity, partner_disparity, options.optimizer.left_right_max_difference_px);
+    const int inconsistent = size.area() - cv::countNonZero(consistent);
+    // A half-occluded band is at most as wide as the label range in pixels of disparity.
+    const auto [min_disparity, max_disparity] =
+        std::minmax_element(pair_disparities.begin(), pair_disparities.end());
+    const int max_run_px = static_cast<int>(std::ceil(*max_disparity - *min_disparity));
+    const int filled =
+        optimize::FillFromBackground(consistent, max_run_px, &optimized.labels, &own_disparity);
+    inconsistent_preview = RenderInconsistent(reference.image, consistent);
+    spdlog::info("left-right check: {} pixels ({:.2f} %) inconsistent, {} filled", inconsistent,
+                 100.0 * inconsistent / size.area(), filled);
+    clock.Done({{"max_difference_px", options.optimizer.left_right_max_difference_px},
+                {"inconsistent_pixels", inconsistent},
+                {"inconsistent_percent", 100.0 * inconsistent / size.area()},
+                {"filled_pixels", filled},
+                {"max_fill_run_px", max_run_px},
+                {"partner_energy_sum", partner.energy_sum}});
+  }
 
   // 6. Depth (and disparity) maps.
   const cv::Mat depth = internal::LabelMapToDepth(optimized.labels, labels);
@@ -488,6 +602,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     if (dataset.ground_truth.HasDepth()) {
       add("ground_truth.png", DepthPreview(dataset.ground_truth.depth, lo, hi));
     }
+    if (!inconsistent_preview.empty()) add("left_right_check.png", inconsistent_preview);
     for (const auto& [name, image] : mesh_previews) add(name, image);
     for (const auto& [name, image] : previews) add(name, image);
   }

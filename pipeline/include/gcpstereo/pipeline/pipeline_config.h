@@ -79,6 +79,12 @@ struct OptimizerOptions {
   // processing resolution); elsewhere D̂ is an extrapolation over textureless areas and the data
   // and smoothness terms decide. 0 = everywhere (the paper). Range >= 0.
   double prior_radius_px = 0.0;
+  // optimizer.left_right_check: rectified pairs only (Birchfield–Tomasi cost). Solves the pair a
+  // second time with the neighbour as reference and replaces the reference pixels whose two
+  // disparities differ by more than left_right_max_difference_px by the background side of their
+  // row: removes the foreground fattening into half-occluded bands. Doubles the optimisation time.
+  bool left_right_check = false;
+  double left_right_max_difference_px = 1.0;
 };
 
 // Keys of the `optimizer:` section that the pipeline itself reads.

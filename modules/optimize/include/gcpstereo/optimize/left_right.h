@@ -1,0 +1,36 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// Left-right consistency of a rectified pair and filling of the pixels that fail it.
+//
+// Window costs and the smoothness term both let a foreground surface spread over the background
+// next to it ("foreground fattening"), above all into the half-occluded band on the side of an
+// object that only the reference camera sees. A disparity map computed with the other image as
+// reference does not share that error: where the two maps disagree, the reference pixel is
+// occluded or wrong. Such pixels are filled from the nearest consistent pixel of the same row that
+// lies farther away (smaller disparity), the usual assumption that occluded surface belongs to the
+// background.
+#pragma once
+
+#include <opencv2/core/mat.hpp>
+
+namespace gcpstereo::optimize {
+
+// Disparity convention: a left pixel (x, y) with disparity d matches the right pixel (x − d, y);
+// a right pixel (x, y) with disparity d matches the left pixel (x + d, y). Both maps CV_32F of the
+// same size, NaN or ±inf where unknown.
+//
+// Returns CV_8U, 255 where the left pixel is consistent: its match x − d (rounded) lies inside the
+// right image and the right map there differs from d by at most `max_difference_px`.
+cv::Mat LeftRightConsistent(const cv::Mat& left_disparity, const cv::Mat& right_disparity,
+                            double max_difference_px);
+
+// Fills the pixels where `consistent` is 0, run by run along each row: the nearest consistent
+// pixels left and right of a run are found and the one with the smaller disparity (the background)
+// gives its value of `values` (any CV_32F map, e.g. labels) and of `disparity` to the whole run; at
+// an image border the one neighbour there is used. Runs longer than `max_run_px` are left as they
+// are: a half-occluded band is never wider than the largest disparity jump, so the label range in
+// pixels is the natural bound, and longer runs (textureless areas where the two views disagree)
+// are not occlusions. Returns the number of pixels filled.
+int FillFromBackground(const cv::Mat& consistent, int max_run_px, cv::Mat* values,
+                       cv::Mat* disparity);
+
+}  // namespace gcpstereo::optimize

@@ -1,0 +1,87 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/optimize/left_right.h"
+
+#include <cmath>
+#include <cstdint>
+
+#include "gcpstereo/core/error.h"
+
+namespace gcpstereo::optimize {
+namespace {
+
+void Require(bool condition, const char* message) {
+  if (!condition) throw Error(message);
+}
+
+}  // namespace
+
+cv::Mat LeftRightConsistent(const cv::Mat& left_disparity, const cv::Mat& right_disparity,
+                            double max_difference_px) {
+  Require(left_disparity.type() == CV_32F && right_disparity.type() == CV_32F,
+          "LeftRightConsistent: disparity maps must be CV_32F");
+  Require(left_disparity.size() == right_disparity.size(),
+          "LeftRightConsistent: the two maps differ in size");
+  Require(max_difference_px >= 0.0, "LeftRightConsistent: negative tolerance");
+  cv::Mat consistent(left_disparity.size(), CV_8U, cv::Scalar(0));
+  for (int r = 0; r < left_disparity.rows; ++r) {
+    const float* left = left_disparity.ptr<float>(r);
+    const float* right = right_disparity.ptr<float>(r);
+    std::uint8_t* out = consistent.ptr<std::uint8_t>(r);
+    for (int c = 0; c < left_disparity.cols; ++c) {
+      const float d = left[c];
+      if (!std::isfinite(d)) continue;
+      const long match = std::lround(c - static_cast<double>(d));
+      if (match < 0 || match >= left_disparity.cols) continue;
+      const float other = right[match];
+      if (std::isfinite(other) && std::abs(other - d) <= max_difference_px) out[c] = 255;
+    }
+  }
+  return consistent;
+}
+
+int FillFromBackground(const cv::Mat& consistent, int max_run_px, cv::Mat* values,
+                       cv::Mat* disparity) {
+  Require(values != nullptr && disparity != nullptr, "FillFromBackground: null output");
+  Require(consistent.type() == CV_8U && values->type() == CV_32F && disparity->type() == CV_32F,
+          "FillFromBackground: expects a CV_8U mask and CV_32F maps");
+  Require(consistent.size() == values->size() && consistent.size() == disparity->size(),
+          "FillFromBackground: sizes differ");
+  Require(max_run_px >= 0, "FillFromBackground: negative run length");
+  int filled = 0;
+  const int cols = consistent.cols;
+  for (int r = 0; r < consistent.rows; ++r) {
+    const std::uint8_t* ok = consistent.ptr<std::uint8_t>(r);
+    float* value = values->ptr<float>(r);
+    float* disp = disparity->ptr<float>(r);
+    // The consistent values are read before any is written: fills never feed other fills.
+    int previous = -1;  // last consistent column left of c
+    int c = 0;
+    while (c < cols) {
+      if (ok[c]) {
+        previous = c++;
+        continue;
+      }
+      int next = c;
+      while (next < cols && !ok[next]) ++next;  // first consistent column at or right of c
+      int source = -1;
+      if (previous >= 0 && next < cols) {
+        source = disp[previous] <= disp[next] ? previous : next;
+      } else if (previous >= 0) {
+        source = previous;
+      } else if (next < cols) {
+        source = next;
+      }
+      if (source >= 0 && next - c <= max_run_px) {
+        for (int k = c; k < next; ++k) {
+          value[k] = value[source];
+          disp[k] = disp[source];
+          ++filled;
+        }
+      }
+      c = next;
+    }
+  }
+  return filled;
+}
+
+}  // namespace gcpstereo::optimize

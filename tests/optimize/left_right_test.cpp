@@ -1,0 +1,119 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// Left-right check and background fill on a one-row step scene whose true maps are known.
+#include "gcpstereo/optimize/left_right.h"
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "gcpstereo/core/error.h"
+
+namespace gcpstereo::optimize {
+namespace {
+
+// A foreground at disparity 5 over a background at disparity 2, on rows of 60 pixels. In the left
+// view the foreground covers columns [20, 40), in the right view [15, 35). The left columns
+// [17, 20) are background that the right camera does not see (the foreground hides it there).
+constexpr int kCols = 60, kRows = 3;
+constexpr float kFore = 5.0f, kBack = 2.0f;
+
+cv::Mat TrueLeft() {
+  cv::Mat d(kRows, kCols, CV_32F, cv::Scalar(kBack));
+  d.colRange(20, 40).setTo(kFore);
+  return d;
+}
+cv::Mat TrueRight() {
+  cv::Mat d(kRows, kCols, CV_32F, cv::Scalar(kBack));
+  d.colRange(15, 35).setTo(kFore);
+  return d;
+}
+std::vector<int> InconsistentColumns(const cv::Mat& consistent, int row) {
+  std::vector<int> cols;
+  for (int c = 0; c < consistent.cols; ++c) {
+    if (!consistent.at<std::uint8_t>(row, c)) cols.push_back(c);
+  }
+  return cols;
+}
+
+TEST(LeftRightCheck, TrueMapsFailOnlyWhereTheRightCameraCannotSee) {
+  const cv::Mat consistent = LeftRightConsistent(TrueLeft(), TrueRight(), 0.5);
+  // Columns 0 and 1 match outside the right image; 17–19 are the half-occluded band.
+  const std::vector<int> expected{0, 1, 17, 18, 19};
+  for (int r = 0; r < kRows; ++r) EXPECT_EQ(InconsistentColumns(consistent, r), expected);
+}
+
+TEST(LeftRightCheck, FatteningIsDetectedAndFilledFromTheBackground) {
+  cv::Mat left = TrueLeft();
+  left.colRange(16, 20).setTo(kFore);  // the foreground spills 4 px over its left edge
+  const cv::Mat consistent = LeftRightConsistent(left, TrueRight(), 1.0);
+  EXPECT_EQ(InconsistentColumns(consistent, 0), (std::vector<int>{0, 1, 16, 17, 18, 19}));
+
+  cv::Mat values = left * 10.0f;  // e.g. labels: any map that travels with the disparity
+  const int filled = FillFromBackground(consistent, kCols, &values, &left);
+  EXPECT_EQ(filled, kRows * 6);
+  // Every pixel of the row is now the truth: the band takes the background side (2, not 5), the
+  // border columns their only consistent neighbour.
+  EXPECT_EQ(cv::norm(left, TrueLeft(), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(values, TrueLeft() * 10.0f, cv::NORM_INF), 0.0);
+}
+
+TEST(LeftRightCheck, ToleranceAndUnknownValues) {
+  cv::Mat right = TrueRight();
+  right += 0.75f;  // every right value off by 0.75 px
+  EXPECT_EQ(cv::countNonZero(LeftRightConsistent(TrueLeft(), right, 0.5)), 0);
+  EXPECT_EQ(cv::countNonZero(LeftRightConsistent(TrueLeft(), right, 1.0)), kRows * (kCols - 5));
+
+  cv::Mat left = TrueLeft();
+  left.at<float>(1, 30) = std::numeric_limits<float>::quiet_NaN();
+  left.at<float>(1, 31) = std::numeric_limits<float>::infinity();
+  const cv::Mat consistent = LeftRightConsistent(left, TrueRight(), 0.5);
+  EXPECT_EQ(consistent.at<std::uint8_t>(1, 30), 0);
+  EXPECT_EQ(consistent.at<std::uint8_t>(1, 31), 0);
+  EXPECT_EQ(consistent.at<std::uint8_t>(0, 30), 255);
+}
+
+TEST(LeftRightCheck, RunsLongerThanTheBoundAreKept) {
+  cv::Mat disparity(1, 20, CV_32F, cv::Scalar(3.0f));
+  disparity.colRange(2, 5).setTo(9.0f);   // run of 3
+  disparity.colRange(8, 16).setTo(7.0f);  // run of 8
+  disparity.at<float>(0, 19) = 1.0f;
+  cv::Mat consistent(1, 20, CV_8U, cv::Scalar(255));
+  consistent.colRange(2, 5).setTo(0);
+  consistent.colRange(8, 16).setTo(0);
+  cv::Mat values = disparity.clone();
+  EXPECT_EQ(FillFromBackground(consistent, 4, &values, &disparity), 3);
+  for (int c = 2; c < 5; ++c) EXPECT_EQ(disparity.at<float>(0, c), 3.0f);
+  for (int c = 8; c < 16; ++c) EXPECT_EQ(disparity.at<float>(0, c), 7.0f);  // untouched
+
+  // The smaller of the two neighbours wins, whichever side it is on.
+  cv::Mat d2(1, 6, CV_32F, cv::Scalar(0));
+  d2.at<float>(0, 0) = 8.0f;
+  d2.at<float>(0, 5) = 4.0f;
+  cv::Mat mask(1, 6, CV_8U, cv::Scalar(0));
+  mask.at<std::uint8_t>(0, 0) = mask.at<std::uint8_t>(0, 5) = 255;
+  cv::Mat v2 = d2.clone();
+  EXPECT_EQ(FillFromBackground(mask, 10, &v2, &d2), 4);
+  for (int c = 1; c < 5; ++c) EXPECT_EQ(v2.at<float>(0, c), 4.0f);
+
+  // A row without any consistent pixel has nothing to copy.
+  cv::Mat none(1, 6, CV_8U, cv::Scalar(0));
+  EXPECT_EQ(FillFromBackground(none, 10, &v2, &d2), 0);
+}
+
+TEST(LeftRightCheck, BadInputThrows) {
+  const cv::Mat left = TrueLeft();
+  EXPECT_THROW(LeftRightConsistent(left, cv::Mat(2, 2, CV_32F), 1.0), Error);
+  EXPECT_THROW(LeftRightConsistent(left, TrueRight(), -1.0), Error);
+  cv::Mat as_int;
+  left.convertTo(as_int, CV_32S);
+  EXPECT_THROW(LeftRightConsistent(as_int, TrueRight(), 1.0), Error);
+  cv::Mat values = left.clone(), disparity = left.clone();
+  EXPECT_THROW(FillFromBackground(cv::Mat(kRows, kCols, CV_32F), 4, &values, &disparity), Error);
+  EXPECT_THROW(FillFromBackground(cv::Mat(kRows, kCols, CV_8U), -1, &values, &disparity), Error);
+}
+
+}  // namespace
+}  // namespace gcpstereo::optimize
