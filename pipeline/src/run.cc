@@ -21,6 +21,7 @@
 #include "gcpstereo/cost/label_range.h"
 #include "gcpstereo/cost/plane_sweep.h"
 #include "gcpstereo/cost/winner_take_all.h"
+#include "gcpstereo/gcp/gcp_sources.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
 #include "gcpstereo/io/atomic_file.h"
 #include "gcpstereo/io/dataset_io.h"
@@ -97,31 +98,34 @@ cv::Mat PriorNearGcps(const cv::Mat& prior, const std::vector<cv::Point>& gcp_pi
   return near;
 }
 
-// The GCPs seen from the other image of a rectified pair, mirrored left-right so that the pair's
-// disparity convention holds with that image as reference (see the left-right check in
-// RunPipeline): a GCP at (col, row) with disparity d lies at (col − d, row) in the other image and
-// at width − 1 − (col − d) in its mirror. Where two land on one pixel the nearer one is kept.
-// Values are labels (NaN elsewhere); `pixels` receives the occupied pixels.
-cv::Mat MirroredPartnerGcpLabels(const GcpSet& gcps, const LabelSpace& labels, cv::Size size,
-                                 double numerator, std::vector<cv::Point>* pixels) {
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  cv::Mat sparse(size, CV_32F, cv::Scalar(nan));
-  cv::Mat disparity(size, CV_32F, cv::Scalar(-1.0f));
+// The GCPs as the other image of a rectified pair sees them, mirrored left-right so that the
+// pair's disparity convention holds with that image as reference (the left-right check in
+// RunPipeline). Each GCP is back-projected from the reference and projected into `partner` with
+// the visibility tests of the LiDAR source (z-buffer and depth-consistency window): a point the
+// partner cannot see — background next to a pole, hidden behind it from the other camera — would
+// otherwise tie the occluder's pixels to the background. Values are labels (NaN elsewhere);
+// `pixels` receives the occupied pixels.
+cv::Mat MirroredPartnerGcpLabels(const GcpSet& gcps, const LabelSpace& labels,
+                                 const Camera& reference, const Camera& partner,
+                                 const gcp::LidarGcpOptions& visibility,
+                                 std::vector<cv::Point>* pixels) {
+  PointCloud cloud;
   for (const Gcp& g : gcps.points) {
-    if (!(g.depth > 0) || !std::isfinite(g.depth)) continue;
-    const double d = numerator / g.depth;
-    const long col = size.width - 1 - std::lround(g.col - d);
-    if (g.row < 0 || g.row >= size.height || col < 0 || col >= size.width) continue;
-    const double label = labels.LabelOfDepth(g.depth);
-    if (!std::isfinite(label) || d <= disparity.at<float>(g.row, col)) continue;
-    disparity.at<float>(g.row, col) = static_cast<float>(d);
-    sparse.at<float>(g.row, col) = static_cast<float>(label);
+    cloud.points.push_back(
+        reference.BackProject(Eigen::Vector2d(g.col, g.row), g.depth).cast<float>());
+    cloud.sigma.push_back(static_cast<float>(g.sigma));
   }
+  const GcpSet seen =
+      gcp::GcpsFromPointCloud(cloud, Eigen::Matrix4d::Identity(), partner, visibility);
+  cv::Mat sparse(partner.height, partner.width, CV_32F,
+                 cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
   pixels->clear();
-  for (int r = 0; r < size.height; ++r) {
-    for (int c = 0; c < size.width; ++c) {
-      if (!std::isnan(sparse.at<float>(r, c))) pixels->emplace_back(c, r);
-    }
+  for (const Gcp& g : seen.points) {
+    const double label = labels.LabelOfDepth(g.depth);
+    if (!std::isfinite(label)) continue;
+    const int col = partner.width - 1 - g.col;
+    sparse.at<float>(g.row, col) = static_cast<float>(label);
+    pixels->emplace_back(col, g.row);
   }
   return sparse;
 }
@@ -460,8 +464,9 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     cv::Mat mirrored_prior;
     std::vector<cv::Point> mirrored_gcp_pixels;
     if (use_gcp_energy) {
-      const cv::Mat sparse = MirroredPartnerGcpLabels(
-          gcps, labels, size, dataset.disparity_numerator, &mirrored_gcp_pixels);
+      const cv::Mat sparse =
+          MirroredPartnerGcpLabels(gcps, labels, reference.camera, pair_neighbor->camera,
+                                   options.gcp.lidar, &mirrored_gcp_pixels);
       mirrored_prior = PriorNearGcps(
           propagation::Propagate(mirrored_reference, sparse, options.propagation).values,
           mirrored_gcp_pixels, options.optimizer.prior_radius_px);
