@@ -226,6 +226,15 @@ void PipelineConfig::Register(config::Schema* s) {
       "optimizer.left_right_max_difference_px", &optimizer.left_right_max_difference_px,
       Range::AtLeast(0.0),
       {"largest disparity difference between the two views that still counts as consistent", "px"});
+  s->Add("optimizer.left_right_median_radius_px", &optimizer.left_right_median_radius_px,
+         Range::Between(0, 50),
+         {"after the left-right fill, a colour-weighted median over the filled pixels in a "
+          "(2r+1)² window (0 = off): removes the fill's streaks and puts its edges on image edges",
+          "px"});
+  s->Add("optimizer.left_right_median_sigma", &optimizer.left_right_median_sigma,
+         Range::GreaterThan(0.0),
+         {"colour sigma of that median's weights exp(-|I_p - I_q|^2 / sigma^2), intensities in "
+          "[0, 1]"});
   s->Add("optimizer.max_cycles", &optimizer.expansion.max_cycles, Range::AtLeast(1),
          {"maximum α-expansion cycles over all labels"});
   s->Add("optimizer.convergence_tolerance", &optimizer.expansion.convergence_tolerance,

@@ -497,6 +497,12 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     const int max_run_px = static_cast<int>(std::ceil(*max_disparity - *min_disparity));
     const int filled =
         optimize::FillFromBackground(consistent, max_run_px, &optimized.labels, &own_disparity);
+    int smoothed = 0;
+    if (options.optimizer.left_right_median_radius_px > 0) {
+      smoothed = optimize::WeightedMedianOfFilled(
+          reference.image, consistent, options.optimizer.left_right_median_radius_px,
+          options.optimizer.left_right_median_sigma, &optimized.labels, &own_disparity);
+    }
     inconsistent_preview = RenderInconsistent(reference.image, consistent);
     spdlog::info("left-right check: {} pixels ({:.2f} %) inconsistent, {} filled", inconsistent,
                  100.0 * inconsistent / size.area(), filled);
@@ -505,6 +511,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                 {"inconsistent_percent", 100.0 * inconsistent / size.area()},
                 {"filled_pixels", filled},
                 {"max_fill_run_px", max_run_px},
+                {"median_changed_pixels", smoothed},
                 {"partner_energy_sum", partner.energy_sum}});
   }
 

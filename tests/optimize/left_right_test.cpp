@@ -103,6 +103,29 @@ TEST(LeftRightCheck, RunsLongerThanTheBoundAreKept) {
   EXPECT_EQ(FillFromBackground(none, 10, &v2, &d2), 0);
 }
 
+// The row fill ends where the consistent pixels end; the colour-weighted median moves the filled
+// edge onto the image's colour edge.
+TEST(LeftRightCheck, WeightedMedianPutsTheFilledEdgeOnTheColourEdge) {
+  constexpr int kSize = 24;
+  cv::Mat image(kSize, kSize, CV_8UC3, cv::Scalar(40, 40, 40));
+  image.colRange(12, kSize).setTo(cv::Scalar(200, 180, 160));  // colour edge at column 12
+  // Truth: disparity 3 left of the edge, 8 right of it. The fill gave 8 from column 9 on.
+  cv::Mat disparity(kSize, kSize, CV_32F, cv::Scalar(3.0f));
+  disparity.colRange(9, kSize).setTo(8.0f);
+  cv::Mat consistent(kSize, kSize, CV_8U, cv::Scalar(255));
+  consistent.colRange(8, 14).setTo(0);  // the filled band
+  cv::Mat values = disparity * 2.0f;
+  const int changed = WeightedMedianOfFilled(image, consistent, 6, 0.1, &values, &disparity);
+  EXPECT_EQ(changed, kSize * 3);  // columns 9, 10, 11
+  for (int r = 0; r < kSize; ++r) {
+    for (int c = 0; c < kSize; ++c) {
+      const float expected = c < 12 ? 3.0f : 8.0f;
+      ASSERT_EQ(disparity.at<float>(r, c), expected) << r << "," << c;
+      ASSERT_EQ(values.at<float>(r, c), 2.0f * expected) << r << "," << c;
+    }
+  }
+}
+
 TEST(LeftRightCheck, BadInputThrows) {
   const cv::Mat left = TrueLeft();
   EXPECT_THROW(LeftRightConsistent(left, cv::Mat(2, 2, CV_32F), 1.0), Error);
@@ -113,6 +136,13 @@ TEST(LeftRightCheck, BadInputThrows) {
   cv::Mat values = left.clone(), disparity = left.clone();
   EXPECT_THROW(FillFromBackground(cv::Mat(kRows, kCols, CV_32F), 4, &values, &disparity), Error);
   EXPECT_THROW(FillFromBackground(cv::Mat(kRows, kCols, CV_8U), -1, &values, &disparity), Error);
+  const cv::Mat image(kRows, kCols, CV_8UC3, cv::Scalar::all(0));
+  const cv::Mat mask(kRows, kCols, CV_8U, cv::Scalar(0));
+  EXPECT_THROW(WeightedMedianOfFilled(image, mask, 2, 0.0, &values, &disparity), Error);
+  EXPECT_THROW(WeightedMedianOfFilled(image, mask, -1, 0.1, &values, &disparity), Error);
+  EXPECT_THROW(
+      WeightedMedianOfFilled(cv::Mat(kRows, kCols, CV_8U), mask, 2, 0.1, &values, &disparity),
+      Error);
 }
 
 }  // namespace

@@ -1,8 +1,10 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/optimize/left_right.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "gcpstereo/core/error.h"
 
@@ -82,6 +84,71 @@ int FillFromBackground(const cv::Mat& consistent, int max_run_px, cv::Mat* value
     }
   }
   return filled;
+}
+
+int WeightedMedianOfFilled(const cv::Mat& image_bgr, const cv::Mat& consistent, int radius_px,
+                           double sigma_colour, cv::Mat* values, cv::Mat* disparity) {
+  Require(values != nullptr && disparity != nullptr, "WeightedMedianOfFilled: null output");
+  Require(image_bgr.type() == CV_8UC3 && consistent.type() == CV_8U && values->type() == CV_32F &&
+              disparity->type() == CV_32F,
+          "WeightedMedianOfFilled: expects a CV_8UC3 image, a CV_8U mask and CV_32F maps");
+  Require(image_bgr.size() == consistent.size() && consistent.size() == values->size() &&
+              consistent.size() == disparity->size(),
+          "WeightedMedianOfFilled: sizes differ");
+  Require(radius_px >= 0 && sigma_colour > 0.0, "WeightedMedianOfFilled: bad radius or sigma");
+  const cv::Mat source_values = values->clone(), source_disparity = disparity->clone();
+  const double inv_sigma2 = 1.0 / (sigma_colour * sigma_colour * 255.0 * 255.0);
+  int changed = 0;
+  struct Sample {
+    float disparity;
+    float weight;
+    int row, col;
+  };
+  std::vector<Sample> samples;
+  for (int r = 0; r < consistent.rows; ++r) {
+    for (int c = 0; c < consistent.cols; ++c) {
+      if (consistent.at<std::uint8_t>(r, c)) continue;
+      const cv::Vec3b centre = image_bgr.at<cv::Vec3b>(r, c);
+      samples.clear();
+      double total = 0.0;
+      for (int rr = std::max(0, r - radius_px); rr <= std::min(consistent.rows - 1, r + radius_px);
+           ++rr) {
+        for (int cc = std::max(0, c - radius_px);
+             cc <= std::min(consistent.cols - 1, c + radius_px); ++cc) {
+          const float d = source_disparity.at<float>(rr, cc);
+          if (!std::isfinite(d)) continue;
+          const cv::Vec3b other = image_bgr.at<cv::Vec3b>(rr, cc);
+          double distance2 = 0.0;
+          for (int k = 0; k < 3; ++k) {
+            const double delta = static_cast<double>(centre[k]) - other[k];
+            distance2 += delta * delta;
+          }
+          const float w = static_cast<float>(std::exp(-distance2 * inv_sigma2));
+          samples.push_back({d, w, rr, cc});
+          total += w;
+        }
+      }
+      if (samples.empty()) continue;
+      std::sort(samples.begin(), samples.end(), [](const Sample& a, const Sample& b) {
+        return a.disparity < b.disparity ||
+               (a.disparity == b.disparity && (a.row < b.row || (a.row == b.row && a.col < b.col)));
+      });
+      double cumulative = 0.0;
+      const Sample* median = &samples.back();
+      for (const Sample& s : samples) {
+        cumulative += s.weight;
+        if (cumulative >= 0.5 * total) {
+          median = &s;
+          break;
+        }
+      }
+      const float new_value = source_values.at<float>(median->row, median->col);
+      if (new_value != values->at<float>(r, c)) ++changed;
+      values->at<float>(r, c) = new_value;
+      disparity->at<float>(r, c) = median->disparity;
+    }
+  }
+  return changed;
 }
 
 }  // namespace gcpstereo::optimize

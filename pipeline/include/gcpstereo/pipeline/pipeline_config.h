@@ -85,6 +85,10 @@ struct OptimizerOptions {
   // row: removes the foreground fattening into half-occluded bands. Doubles the optimisation time.
   bool left_right_check = false;
   double left_right_max_difference_px = 1.0;
+  // Then a colour-weighted median over the filled pixels (optimize::WeightedMedianOfFilled):
+  // window half-size (0 = off) and colour sigma (intensities in [0, 1]).
+  int left_right_median_radius_px = 0;
+  double left_right_median_sigma = 0.1;
 };
 
 // Keys of the `optimizer:` section that the pipeline itself reads.

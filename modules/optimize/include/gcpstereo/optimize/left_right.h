@@ -33,4 +33,14 @@ cv::Mat LeftRightConsistent(const cv::Mat& left_disparity, const cv::Mat& right_
 int FillFromBackground(const cv::Mat& consistent, int max_run_px, cv::Mat* values,
                        cv::Mat* disparity);
 
+// Smooths the pixels where `consistent` is 0 after FillFromBackground: each takes the weighted
+// median of `disparity` over the (2·radius_px + 1)² window around it, weighted by colour
+// similarity, w = exp(−‖I_p − I_q‖² / σ²) with I the BGR image in [0, 1] and σ = sigma_colour,
+// and copies `values` from the pixel that holds that median. The row-wise fill leaves horizontal
+// streaks and cuts at the fill's end rather than at the image edge; the colour weights move the
+// filled boundary onto the image's edges (Rhemann et al. 2011 use the same post-processing).
+// Reads the maps as they were before the call. Returns the number of pixels changed.
+int WeightedMedianOfFilled(const cv::Mat& image_bgr, const cv::Mat& consistent, int radius_px,
+                           double sigma_colour, cv::Mat* values, cv::Mat* disparity);
+
 }  // namespace gcpstereo::optimize
