@@ -33,7 +33,10 @@ cv::Mat LeftRightConsistent(const cv::Mat& left_disparity, const cv::Mat& right_
       const float d = left[c];
       if (!std::isfinite(d)) continue;
       const long match = std::lround(c - static_cast<double>(d));
-      if (match < 0 || match >= left_disparity.cols) continue;
+      if (match < 0 || match >= left_disparity.cols) {
+        out[c] = 255;  // nothing to check against: kept as the optimisation left it
+        continue;
+      }
       const float other = right[match];
       if (std::isfinite(other) && std::abs(other - d) <= max_difference_px) out[c] = 255;
     }
