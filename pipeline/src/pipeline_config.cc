@@ -24,7 +24,8 @@ void AddCostFilterKeys(config::Schema* s, const std::string& prefix, const std::
   s->Add(prefix + "window_filter", &window->filter, {"box", "guided"},
          {what + ": window mean (box) or edge-preserving guided filter (He et al.)"});
   s->Add(prefix + "guided_epsilon", &window->guided_epsilon, Range::GreaterThan(0.0),
-         {what + ": guided-filter regularisation, intensities in [0, 1]", "", "ε"});
+         {what + ": guided-filter regularisation ε of He et al. (not the paper's ε), "
+                 "intensities in [0, 1]"});
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <iomanip>
@@ -25,6 +27,19 @@ std::string FormatNumber(double v) {
 }
 
 // The scalar text of a node for messages (a compact flow dump for collections).
+// The shortest decimal text that reads back as exactly `value` ("0.1", not yaml-cpp's
+// "0.10000000000000001"), so that `gcpstereo keys` and effective_config.yaml stay legible and
+// still reload to the same bits.
+YAML::Node ShortestNumberNode(double value) {
+  if (!std::isfinite(value)) return YAML::Node(value);
+  char text[40];
+  for (int precision = 6; precision <= 17; ++precision) {
+    std::snprintf(text, sizeof(text), "%.*g", precision, value);
+    if (std::strtod(text, nullptr) == value) break;
+  }
+  return YAML::Node(std::string(text));
+}
+
 std::string NodeText(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "null";
   if (node.IsScalar()) return node.Scalar();
@@ -114,12 +129,14 @@ struct Schema::Entry {
         [&](auto* p) {
           using T = std::decay_t<decltype(*p)>;
           if constexpr (std::is_same_v<T, std::optional<double>>) {
-            n = *p ? YAML::Node(**p) : YAML::Node("auto");
+            n = *p ? ShortestNumberNode(**p) : YAML::Node("auto");
           } else if constexpr (std::is_same_v<T, std::vector<int>> ||
                                std::is_same_v<T, std::vector<std::string>>) {
             n = YAML::Node(YAML::NodeType::Sequence);
             for (const auto& v : *p) n.push_back(v);
             n.SetStyle(YAML::EmitterStyle::Flow);
+          } else if constexpr (std::is_same_v<T, double>) {
+            n = ShortestNumberNode(*p);
           } else {
             n = *p;
           }
