@@ -57,6 +57,19 @@ class TinyScene : public ::testing::Test {
     return nlohmann::json::parse(summary.report_json);
   }
 
+  // A run with one more override must throw E and leave no output in the folder `name`.
+  template <typename E>
+  static void ExpectRunFails(const std::string& override, const std::string& name) {
+    std::vector<std::string> overrides = Overrides();
+    overrides.push_back(override);
+    LoadedConfig config;
+    config.Load("", overrides);
+    const std::string out = *dir_ + "/" + name;
+    EXPECT_THROW(RunPipeline(config, out, "(test)"), E);
+    EXPECT_FALSE(fs::exists(out + "/report.json"));
+    EXPECT_FALSE(fs::exists(out + "/depth.pfm"));
+  }
+
   static std::string* dir_;
 };
 std::string* TinyScene::dir_ = nullptr;
@@ -132,23 +145,12 @@ TEST_F(TinyScene, PriorRadiusLimitsTheGcpEnergyToPixelsNearGcps) {
 }
 
 TEST_F(TinyScene, BadReferenceNameFailsWithoutOutputs) {
-  std::vector<std::string> overrides = Overrides();
-  overrides.push_back("dataset.reference=0099");
-  LoadedConfig config;
-  config.Load("", overrides);
-  EXPECT_THROW(RunPipeline(config, *dir_ + "/bad", "(test)"), Error);
-  EXPECT_FALSE(fs::exists(*dir_ + "/bad/report.json"));
-  EXPECT_FALSE(fs::exists(*dir_ + "/bad/depth.pfm"));
+  ExpectRunFails<Error>("dataset.reference=0099", "bad");
 }
 
 // The left-right check solves the pair again from the neighbour: only for rectified pairs.
 TEST_F(TinyScene, LeftRightCheckNeedsARectifiedPair) {
-  std::vector<std::string> overrides = Overrides();
-  overrides.push_back("optimizer.left_right_check=true");
-  LoadedConfig config;
-  config.Load("", overrides);
-  EXPECT_THROW(RunPipeline(config, *dir_ + "/lr", "(test)"), ConfigError);
-  EXPECT_FALSE(fs::exists(*dir_ + "/lr/report.json"));
+  ExpectRunFails<ConfigError>("optimizer.left_right_check=true", "lr");
 }
 
 // On tsukuba (configs/middlebury_stereo.yaml), the check fills the half-occluded bands left of the
