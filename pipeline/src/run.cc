@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <future>
 #include <limits>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
@@ -384,7 +385,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   };
   // Winner-take-all or graph cuts over the tiles of one view's problem.
   auto optimize_view = [&](const optimize::MakeTileProblem& make_view_problem,
-                           const std::string& progress_title) {
+                           const std::string& progress_title, bool show_progress) {
     optimize::TiledResult optimized;
     if (options.optimizer.method == "wta") {
       // Winner-take-all per tile: the same tiling and cost code, no energy minimisation.
@@ -409,15 +410,55 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
       }
       optimized.labels /= weight;  // 0/0 = NaN where no tile had data: no estimate
     } else {
-      ProgressBar bar(progress_title, 1000);
+      std::optional<ProgressBar> bar;
+      if (show_progress) bar.emplace(progress_title, 1000);
       optimize::RefinementOptions refinement = options.optimizer.refinement;
       refinement.method = optimize::ParseRefinementMethod(options.optimizer.refinement_method);
       optimized = optimize::OptimizeTiled(size, make_view_problem, energy, expansion, tiling, {},
-                                          bar.AsCallback(), refinement);
+                                          bar ? bar->AsCallback() : ProgressCallback(), refinement);
     }
     return optimized;
   };
-  optimize::TiledResult optimized = optimize_view(make_problem, "graph cuts");
+  // The left-right check's second problem (5b below): the neighbour as reference, solved on
+  // mirrored images so that every cost and GCP routine keeps its disparity convention. It needs
+  // nothing from the first solve, so it runs alongside it (α-expansion on one tile is mostly
+  // single-threaded: the two solves share the cores).
+  cv::Mat mirrored_reference, mirrored_neighbor, mirrored_prior;
+  if (options.optimizer.left_right_check) {
+    cv::flip(pair_neighbor->image, mirrored_reference, 1);
+    cv::flip(reference.image, mirrored_neighbor, 1);
+  }
+  auto make_mirrored_problem = [&](const cv::Rect& region) {
+    optimize::OwnedMrfProblem problem;
+    problem.data =
+        cost::ComputeBirchfieldTomasiCost(mirrored_reference, mirrored_neighbor, pair_disparities,
+                                          region, options.cost.birchfield_tomasi);
+    problem.image = mirrored_reference(region).clone();
+    if (use_gcp_energy) problem.prior = mirrored_prior(region).clone();
+    return problem;
+  };
+  double partner_seconds = 0.0;
+  std::future<optimize::TiledResult> partner_result;
+  if (options.optimizer.left_right_check) {
+    partner_result = std::async(std::launch::async, [&] {
+      Timer timer;
+      if (use_gcp_energy) {
+        std::vector<cv::Point> mirrored_gcp_pixels;
+        const cv::Mat sparse =
+            MirroredPartnerGcpLabels(gcps, labels, reference.camera, pair_neighbor->camera,
+                                     options.gcp.lidar, &mirrored_gcp_pixels);
+        mirrored_prior = PriorNearGcps(
+            propagation::Propagate(mirrored_reference, sparse, options.propagation).values,
+            mirrored_gcp_pixels, options.optimizer.prior_radius_px);
+      }
+      optimize::TiledResult result = optimize_view(make_mirrored_problem, "", false);
+      partner_seconds = timer.ElapsedSeconds();
+      return result;
+    });
+  }
+  optimize::TiledResult optimized = optimize_view(
+      make_problem, options.optimizer.left_right_check ? "graph cuts, both views" : "graph cuts",
+      true);
   json tiles = json::array();
   for (const auto& tile : optimized.tiles) {
     const auto& e = tile.expansion;
@@ -451,37 +492,14 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                        {"tiles", tiles},
                        {"energy_sum", optimized.energy_sum}});
 
-  // 5b. Left-right check (optimizer.left_right_check, rectified pairs): the same problem with the
-  // neighbour as reference, solved on mirrored images so that every cost and GCP routine keeps
-  // its disparity convention; pixels whose two disparities disagree are filled from the
-  // background side of their row (optimize/left_right.h).
+  // 5b. Left-right check (optimizer.left_right_check, rectified pairs): pixels whose disparities
+  // from the two solves disagree are filled from the background side of their row
+  // (optimize/left_right.h). The stage's time is the wait for the second solve plus the fill;
+  // partner_seconds is that solve's own wall time (it overlapped the first).
   cv::Mat inconsistent_preview;
   if (options.optimizer.left_right_check) {
     StageClock clock(&stages, "left_right_check");
-    cv::Mat mirrored_reference, mirrored_neighbor;
-    cv::flip(pair_neighbor->image, mirrored_reference, 1);
-    cv::flip(reference.image, mirrored_neighbor, 1);
-    cv::Mat mirrored_prior;
-    std::vector<cv::Point> mirrored_gcp_pixels;
-    if (use_gcp_energy) {
-      const cv::Mat sparse =
-          MirroredPartnerGcpLabels(gcps, labels, reference.camera, pair_neighbor->camera,
-                                   options.gcp.lidar, &mirrored_gcp_pixels);
-      mirrored_prior = PriorNearGcps(
-          propagation::Propagate(mirrored_reference, sparse, options.propagation).values,
-          mirrored_gcp_pixels, options.optimizer.prior_radius_px);
-    }
-    auto make_mirrored_problem = [&](const cv::Rect& region) {
-      optimize::OwnedMrfProblem problem;
-      problem.data =
-          cost::ComputeBirchfieldTomasiCost(mirrored_reference, mirrored_neighbor, pair_disparities,
-                                            region, options.cost.birchfield_tomasi);
-      problem.image = mirrored_reference(region).clone();
-      if (use_gcp_energy) problem.prior = mirrored_prior(region).clone();
-      return problem;
-    };
-    const optimize::TiledResult partner =
-        optimize_view(make_mirrored_problem, "graph cuts, right view");
+    const optimize::TiledResult partner = partner_result.get();  // rethrows its errors
     cv::Mat partner_labels;
     cv::flip(partner.labels, partner_labels, 1);
     const cv::Mat partner_disparity =
@@ -512,7 +530,8 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                 {"filled_pixels", filled},
                 {"max_fill_run_px", max_run_px},
                 {"median_changed_pixels", smoothed},
-                {"partner_energy_sum", partner.energy_sum}});
+                {"partner_energy_sum", partner.energy_sum},
+                {"partner_seconds", partner_seconds}});
   }
 
   // 6. Depth (and disparity) maps.
