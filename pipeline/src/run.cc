@@ -369,23 +369,35 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   const optimize::ExpansionOptions expansion = ExpansionOptionsOf(options);
 
   StageClock optimize_clock(&stages, "cost_and_optimization");
-  auto make_problem = [&](const cv::Rect& region) {
-    optimize::OwnedMrfProblem problem;
-    if (cost_method == "birchfield_tomasi") {
-      problem.data =
-          cost::ComputeBirchfieldTomasiCost(reference.image, pair_neighbor->image, pair_disparities,
-                                            region, options.cost.birchfield_tomasi);
-    } else {
+  // The tile problem of a rectified pair seen from `left` (Birchfield–Tomasi against `right`);
+  // `view_prior` is read when a tile is built, so it may be filled in after this call.
+  auto pair_problem = [&](const cv::Mat& left, const cv::Mat& right, const cv::Mat* view_prior) {
+    return [&, left, right, view_prior](const cv::Rect& region) {
+      optimize::OwnedMrfProblem problem;
+      problem.data = cost::ComputeBirchfieldTomasiCost(left, right, pair_disparities, region,
+                                                       options.cost.birchfield_tomasi);
+      problem.image = left(region).clone();
+      if (use_gcp_energy) problem.prior = (*view_prior)(region).clone();
+      return problem;
+    };
+  };
+  optimize::MakeTileProblem make_problem;
+  if (cost_method == "birchfield_tomasi") {
+    make_problem = pair_problem(reference.image, pair_neighbor->image, &energy_prior);
+  } else {
+    make_problem = [&](const cv::Rect& region) {
+      optimize::OwnedMrfProblem problem;
       problem.data = cost::ComputePlaneSweepCost(reference, dataset.neighbors, labels, region,
                                                  options.cost.plane_sweep);
-    }
-    problem.image = reference.image(region).clone();
-    if (use_gcp_energy) problem.prior = energy_prior(region).clone();
-    return problem;
-  };
-  // Winner-take-all or graph cuts over the tiles of one view's problem.
+      problem.image = reference.image(region).clone();
+      if (use_gcp_energy) problem.prior = energy_prior(region).clone();
+      return problem;
+    };
+  }
+  // Winner-take-all or graph cuts over the tiles of one view's problem; an empty title shows no
+  // progress bar.
   auto optimize_view = [&](const optimize::MakeTileProblem& make_view_problem,
-                           const std::string& progress_title, bool show_progress) {
+                           const std::string& progress_title) {
     optimize::TiledResult optimized;
     if (options.optimizer.method == "wta") {
       // Winner-take-all per tile: the same tiling and cost code, no energy minimisation.
@@ -411,7 +423,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
       optimized.labels /= weight;  // 0/0 = NaN where no tile had data: no estimate
     } else {
       std::optional<ProgressBar> bar;
-      if (show_progress) bar.emplace(progress_title, 1000);
+      if (!progress_title.empty()) bar.emplace(progress_title, 1000);
       optimize::RefinementOptions refinement = options.optimizer.refinement;
       refinement.method = optimize::ParseRefinementMethod(options.optimizer.refinement_method);
       optimized = optimize::OptimizeTiled(size, make_view_problem, energy, expansion, tiling, {},
@@ -428,15 +440,8 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     cv::flip(pair_neighbor->image, mirrored_reference, 1);
     cv::flip(reference.image, mirrored_neighbor, 1);
   }
-  auto make_mirrored_problem = [&](const cv::Rect& region) {
-    optimize::OwnedMrfProblem problem;
-    problem.data =
-        cost::ComputeBirchfieldTomasiCost(mirrored_reference, mirrored_neighbor, pair_disparities,
-                                          region, options.cost.birchfield_tomasi);
-    problem.image = mirrored_reference(region).clone();
-    if (use_gcp_energy) problem.prior = mirrored_prior(region).clone();
-    return problem;
-  };
+  const optimize::MakeTileProblem make_mirrored_problem =
+      pair_problem(mirrored_reference, mirrored_neighbor, &mirrored_prior);
   double partner_seconds = 0.0;
   std::future<optimize::TiledResult> partner_result;
   if (options.optimizer.left_right_check) {
@@ -451,14 +456,13 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
             propagation::Propagate(mirrored_reference, sparse, options.propagation).values,
             mirrored_gcp_pixels, options.optimizer.prior_radius_px);
       }
-      optimize::TiledResult result = optimize_view(make_mirrored_problem, "", false);
+      optimize::TiledResult result = optimize_view(make_mirrored_problem, "");
       partner_seconds = timer.ElapsedSeconds();
       return result;
     });
   }
   optimize::TiledResult optimized = optimize_view(
-      make_problem, options.optimizer.left_right_check ? "graph cuts, both views" : "graph cuts",
-      true);
+      make_problem, options.optimizer.left_right_check ? "graph cuts, both views" : "graph cuts");
   json tiles = json::array();
   for (const auto& tile : optimized.tiles) {
     const auto& e = tile.expansion;
