@@ -178,6 +178,18 @@ void PipelineConfig::Register(config::Schema* s) {
   AddCostFilterKeys(s, "cost.", "rectified pair", &cost.birchfield_tomasi.window);
   AddCostFilterKeys(s, "cost.sweep_", "plane sweep", &cost.plane_sweep.window);
 
+  s->Add("propagation.method", &propagation.method, {"linear_system", "weighted_median"},
+         {"linear_system = the paper's eq. 5 (a smooth, edge-aware interpolation); weighted_median "
+          "= each pixel takes the colour- and distance-weighted median of the GCPs in its window "
+          "(keeps thin foreground and depth edges of dense GCPs such as a LiDAR scan; no prior "
+          "farther than the radius from every GCP)"});
+  s->Add("propagation.median_radius_px", &propagation.median_radius_px, Range::Between(1, 100),
+         {"weighted_median: half-size of the window of GCPs", "px"});
+  s->Add("propagation.median_sigma_px", &propagation.median_sigma_px, Range::GreaterThan(0.0),
+         {"weighted_median: spatial bandwidth of the weights exp(-d^2/(2 sigma^2))", "px"});
+  s->Add("propagation.median_sigma_colour", &propagation.median_sigma_colour,
+         Range::GreaterThan(0.0),
+         {"weighted_median: colour bandwidth of the weights exp(-|ΔRGB|^2/(2 sigma^2))", "RGB"});
   s->Add("propagation.gamma", &propagation.gamma, Range::GreaterThan(0.0),
          {"colour bandwidth of the affinities w = exp(−|ΔRGB|/γ) (paper: 1.25; measured best: 4)",
           "RGB", "γ"});
@@ -189,8 +201,9 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("propagation.solver", &propagation.solver, {"umfpack", "cholmod"},
          {"sparse solver: CHOLMOD on the symmetric form of eq. 5 (same solution to 1e-6, about "
           "twice as fast), or UMFPACK on eq. 5 as in the paper"});
-  s->Add("propagation.ordering", &propagation.ordering, {"nested_dissection", "solver"},
-         {"fill-reducing ordering: geometric nested dissection of the grid or the solver's own"});
+  s->Add("propagation.ordering", &propagation.ordering, {"nested_dissection", "amd"},
+         {"fill-reducing ordering: geometric nested dissection of the grid, or amd = the "
+          "solver's own approximate minimum degree"});
 
   s->Add("optimizer.method", &optimizer.method, {"graph_cuts", "wta"},
          {"graph_cuts = minimise E_data + E_smooth + E_gcp (the paper); wta = winner-take-all of "
@@ -227,6 +240,12 @@ void PipelineConfig::Register(config::Schema* s) {
       "optimizer.left_right_max_difference_px", &optimizer.left_right_max_difference_px,
       Range::AtLeast(0.0),
       {"largest disparity difference between the two views that still counts as consistent", "px"});
+  s->Add("optimizer.left_right_gcp_radius_px", &optimizer.left_right_gcp_radius_px,
+         Range::Between(0, 100),
+         {"after the left-right fill, a filled pixel keeps its optimised value when the nearest GCP "
+          "within this radius is closer to that value than to the fill's (0 = off): thin "
+          "foreground the other view lost stays where the GCPs measure it",
+          "px"});
   s->Add("optimizer.left_right_median_radius_px", &optimizer.left_right_median_radius_px,
          Range::Between(0, 50),
          {"after the left-right fill, a colour-weighted median over the filled pixels in a "

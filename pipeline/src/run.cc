@@ -517,22 +517,37 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     const auto [min_disparity, max_disparity] =
         std::minmax_element(pair_disparities.begin(), pair_disparities.end());
     const int max_run_px = static_cast<int>(std::ceil(*max_disparity - *min_disparity));
+    const cv::Mat labels_before_fill = optimized.labels.clone();
+    const cv::Mat disparity_before_fill = own_disparity.clone();
+    cv::Mat checked = consistent.clone();
     const int filled =
-        optimize::FillFromBackground(consistent, max_run_px, &optimized.labels, &own_disparity);
+        optimize::FillFromBackground(checked, max_run_px, &optimized.labels, &own_disparity);
+    int restored = 0;
+    if (options.optimizer.left_right_gcp_radius_px > 0) {
+      cv::Mat gcp_disparity(size, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+      for (const Gcp& g : gcps.points) {
+        gcp_disparity.at<float>(g.row, g.col) =
+            static_cast<float>(dataset.disparity_numerator / g.depth);
+      }
+      restored = optimize::RestoreGcpConfirmed(
+          gcp_disparity, options.optimizer.left_right_gcp_radius_px, labels_before_fill,
+          disparity_before_fill, &checked, &optimized.labels, &own_disparity);
+    }
     int smoothed = 0;
     if (options.optimizer.left_right_median_radius_px > 0) {
       smoothed = optimize::WeightedMedianOfFilled(
-          reference.image, consistent, options.optimizer.left_right_median_radius_px,
+          reference.image, checked, options.optimizer.left_right_median_radius_px,
           options.optimizer.left_right_median_sigma, &optimized.labels, &own_disparity);
     }
     inconsistent_preview = RenderInconsistent(reference.image, consistent);
-    spdlog::info("left-right check: {} pixels ({:.2f} %) inconsistent, {} filled", inconsistent,
-                 100.0 * inconsistent / size.area(), filled);
+    spdlog::info("left-right check: {} pixels ({:.2f} %) inconsistent, {} filled, {} kept by GCPs",
+                 inconsistent, 100.0 * inconsistent / size.area(), filled, restored);
     clock.Done({{"max_difference_px", options.optimizer.left_right_max_difference_px},
                 {"inconsistent_pixels", inconsistent},
                 {"inconsistent_percent", 100.0 * inconsistent / size.area()},
                 {"filled_pixels", filled},
                 {"max_fill_run_px", max_run_px},
+                {"gcp_restored_pixels", restored},
                 {"median_changed_pixels", smoothed},
                 {"partner_energy_sum", partner.energy_sum},
                 {"partner_seconds", partner_seconds}});

@@ -135,6 +135,63 @@ TEST(LeftRightCheck, WeightedMedianPutsTheFilledEdgeOnTheColourEdge) {
   }
 }
 
+// A pole 3 px wide at disparity 9 that the right view lost: the check flags it and the fill puts
+// the background there; a GCP on the pole within the radius brings it back. In a fattened band,
+// GCPs on the background confirm the fill.
+TEST(LeftRightCheck, GcpsOnThinForegroundUndoTheFill) {
+  const cv::Mat nan(kRows, kCols, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  cv::Mat left(kRows, kCols, CV_32F, cv::Scalar(kBack));
+  left.colRange(30, 33).setTo(9.0f);
+  const cv::Mat right(kRows, kCols, CV_32F, cv::Scalar(kBack));  // no pole
+  cv::Mat consistent = LeftRightConsistent(left, right, 1.0);
+  EXPECT_EQ(InconsistentColumns(consistent, 0), (std::vector<int>{30, 31, 32}));
+  const cv::Mat left_before = left.clone(), values_before = left * 10.0f;
+  cv::Mat values = values_before.clone();
+  ASSERT_EQ(FillFromBackground(consistent, kCols, &values, &left), kRows * 3);
+
+  cv::Mat gcps = nan.clone();
+  gcps.at<float>(1, 31) = 9.2f;   // on the pole
+  gcps.at<float>(1, 26) = kBack;  // background, 4 px left of the pole
+  // Radius 0 only reaches the GCP's own pixel.
+  {
+    cv::Mat l = left.clone(), v = values.clone(), m = consistent.clone();
+    EXPECT_EQ(RestoreGcpConfirmed(gcps, 0, values_before, left_before, &m, &v, &l), 1);
+    EXPECT_EQ(l.at<float>(1, 31), 9.0f);
+    EXPECT_EQ(l.at<float>(1, 30), kBack);
+  }
+  // Radius 4: every pole pixel of the three rows has the pole GCP as its nearest (column 30 of
+  // row 1 is 1 px from it and 4 px from the background GCP).
+  const int restored = RestoreGcpConfirmed(gcps, 4, values_before, left_before, &consistent,
+                                           &values, &left);
+  EXPECT_EQ(restored, kRows * 3);
+  EXPECT_EQ(cv::norm(left, left_before, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(values, values_before, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::countNonZero(consistent), kRows * kCols);  // restored pixels count as checked
+
+  // Fattening 4 px over the left edge of a real foreground: a background GCP in the band keeps
+  // the fill, the foreground GCP beyond the edge is farther away.
+  cv::Mat fat = TrueLeft();
+  fat.colRange(16, 20).setTo(kFore);
+  cv::Mat mask = LeftRightConsistent(fat, TrueRight(), 1.0);
+  const cv::Mat fat_before = fat.clone();
+  cv::Mat fat_values = fat.clone();
+  FillFromBackground(mask, kCols, &fat_values, &fat);
+  cv::Mat band_gcps = nan.clone();
+  for (int r = 0; r < kRows; ++r) {
+    band_gcps.at<float>(r, 17) = kBack + 0.3f;  // in the band: 0–2 px from its pixels
+    band_gcps.at<float>(r, 22) = kFore;         // on the foreground: 3–6 px from them
+  }
+  EXPECT_EQ(RestoreGcpConfirmed(band_gcps, 8, fat_before, fat_before, &mask, &fat_values, &fat),
+            0);
+  EXPECT_EQ(cv::norm(fat, TrueLeft(), cv::NORM_INF), 0.0);
+  // Without the background GCP the foreground one is the nearest, and the fattening comes back:
+  // the rule trusts the measurement, so GCPs must be visible in the reference view.
+  band_gcps.col(17).setTo(std::numeric_limits<float>::quiet_NaN());
+  EXPECT_EQ(RestoreGcpConfirmed(band_gcps, 8, fat_before, fat_before, &mask, &fat_values, &fat),
+            kRows * 4);
+  EXPECT_EQ(fat.at<float>(0, 16), kFore);
+}
+
 TEST(LeftRightCheck, BadInputThrows) {
   const cv::Mat left = TrueLeft();
   EXPECT_THROW(LeftRightConsistent(left, cv::Mat(2, 2, CV_32F), 1.0), Error);
@@ -152,6 +209,11 @@ TEST(LeftRightCheck, BadInputThrows) {
   EXPECT_THROW(
       WeightedMedianOfFilled(cv::Mat(kRows, kCols, CV_8U), mask, 2, 0.1, &values, &disparity),
       Error);
+  cv::Mat m = mask.clone();
+  EXPECT_THROW(RestoreGcpConfirmed(left, -1, left, left, &m, &values, &disparity), Error);
+  EXPECT_THROW(RestoreGcpConfirmed(cv::Mat(2, 2, CV_32F), 2, left, left, &m, &values, &disparity),
+               Error);
+  EXPECT_THROW(RestoreGcpConfirmed(left, 2, left, left, nullptr, &values, &disparity), Error);
 }
 
 }  // namespace

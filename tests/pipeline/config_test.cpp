@@ -2,6 +2,7 @@
 #include "gcpstereo/pipeline/pipeline_config.h"
 
 #include <filesystem>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -59,6 +60,20 @@ TEST(PipelineConfig, CrossKeyChecks) {
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_STREQ(e.what(), "gcp.sources lists lidar but gcp.lidar.path is not set");
+  }
+}
+
+// Every choice the schema offers for an algorithm key passes the module's own check (the schema
+// once offered propagation.ordering "solver" where the module expected "amd").
+TEST(PipelineConfig, EveryChoiceOfTheAlgorithmKeysLoads) {
+  for (const char* setting :
+       {"propagation.ordering=nested_dissection", "propagation.ordering=amd",
+        "propagation.solver=umfpack", "propagation.solver=cholmod",
+        "propagation.method=linear_system", "propagation.method=weighted_median",
+        "optimizer.method=wta", "optimizer.method=graph_cuts"}) {
+    SCOPED_TRACE(setting);
+    LoadedConfig config;
+    EXPECT_NO_THROW(config.Load("", {"dataset.path=/x", "dataset.reference=a", setting}));
   }
 }
 

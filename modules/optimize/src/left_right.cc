@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "gcpstereo/core/error.h"
@@ -87,6 +88,56 @@ int FillFromBackground(const cv::Mat& consistent, int max_run_px, cv::Mat* value
     }
   }
   return filled;
+}
+
+int RestoreGcpConfirmed(const cv::Mat& gcp_disparity, int radius_px,
+                        const cv::Mat& values_before, const cv::Mat& disparity_before,
+                        cv::Mat* consistent, cv::Mat* values, cv::Mat* disparity) {
+  Require(consistent != nullptr && values != nullptr && disparity != nullptr,
+          "RestoreGcpConfirmed: null output");
+  Require(consistent->type() == CV_8U && gcp_disparity.type() == CV_32F &&
+              values_before.type() == CV_32F && disparity_before.type() == CV_32F &&
+              values->type() == CV_32F && disparity->type() == CV_32F,
+          "RestoreGcpConfirmed: expects a CV_8U mask and CV_32F maps");
+  const cv::Size size = consistent->size();
+  Require(gcp_disparity.size() == size && values_before.size() == size &&
+              disparity_before.size() == size && values->size() == size &&
+              disparity->size() == size,
+          "RestoreGcpConfirmed: sizes differ");
+  Require(radius_px >= 0, "RestoreGcpConfirmed: negative radius");
+  const int radius2 = radius_px * radius_px;
+  int restored = 0;
+  for (int r = 0; r < size.height; ++r) {
+    std::uint8_t* ok = consistent->ptr<std::uint8_t>(r);
+    for (int c = 0; c < size.width; ++c) {
+      if (ok[c]) continue;
+      const float before = disparity_before.at<float>(r, c);
+      const float after = disparity->at<float>(r, c);
+      if (!std::isfinite(before) || before == after) continue;
+      // The nearest GCP within the radius.
+      int best = radius2 + 1;
+      float gcp = std::numeric_limits<float>::quiet_NaN();
+      for (int y = std::max(0, r - radius_px); y <= std::min(size.height - 1, r + radius_px); ++y) {
+        const float* row = gcp_disparity.ptr<float>(y);
+        for (int x = std::max(0, c - radius_px); x <= std::min(size.width - 1, c + radius_px);
+             ++x) {
+          const int d2 = (y - r) * (y - r) + (x - c) * (x - c);
+          if (d2 < best && std::isfinite(row[x])) {
+            best = d2;
+            gcp = row[x];
+          }
+        }
+      }
+      if (!std::isfinite(gcp)) continue;
+      if (!std::isfinite(after) || std::abs(gcp - before) < std::abs(gcp - after)) {
+        values->at<float>(r, c) = values_before.at<float>(r, c);
+        disparity->at<float>(r, c) = before;
+        ok[c] = 255;
+        ++restored;
+      }
+    }
+  }
+  return restored;
 }
 
 int WeightedMedianOfFilled(const cv::Mat& image_bgr, const cv::Mat& consistent, int radius_px,

@@ -147,6 +147,22 @@ void NestedDissection(int r0, int r1, int c0, int c1, int width, const std::vect
 }  // namespace
 
 void PropagationOptions::Check() const {
+  if (method != "linear_system" && method != "weighted_median") {
+    throw ConfigError(ViolatedConstraint("propagation.method", "'" + method + "'",
+                                         "one of 'linear_system', 'weighted_median'"));
+  }
+  if (!(median_radius_px >= 1 && median_radius_px <= 100)) {
+    throw ConfigError(ViolatedConstraint("propagation.median_radius_px",
+                                         std::to_string(median_radius_px), "1 <= radius <= 100"));
+  }
+  if (!(median_sigma_px > 0.0) || !std::isfinite(median_sigma_px)) {
+    throw ConfigError(ViolatedConstraint("propagation.median_sigma_px",
+                                         FormatNumber(median_sigma_px), "sigma > 0"));
+  }
+  if (!(median_sigma_colour > 0.0) || !std::isfinite(median_sigma_colour)) {
+    throw ConfigError(ViolatedConstraint("propagation.median_sigma_colour",
+                                         FormatNumber(median_sigma_colour), "sigma > 0"));
+  }
   if (!(gamma > 0.0) || !std::isfinite(gamma)) {
     throw ConfigError(ViolatedConstraint("propagation.gamma", FormatNumber(gamma), "gamma > 0"));
   }
@@ -350,6 +366,9 @@ PropagationResult PropagateWith(const cv::Mat& image_bgr, const cv::Mat& sparse_
 
 PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
                             const PropagationOptions& options) {
+  if (options.method == "weighted_median") {
+    return PropagateByWeightedMedian(image_bgr, sparse_values, options);
+  }
   if (ParseSparseSolverKind(options.solver) != SparseSolverKind::kCholmod) {
     return PropagateWith(image_bgr, sparse_values, options);
   }

@@ -85,6 +85,9 @@ struct OptimizerOptions {
   // row: removes the foreground fattening into half-occluded bands. Doubles the optimisation time.
   bool left_right_check = false;
   double left_right_max_difference_px = 1.0;
+  // Before the median: a filled pixel takes back its optimised value when the nearest GCP within
+  // this radius is closer to it than to the fill (optimize::RestoreGcpConfirmed); 0 = off.
+  int left_right_gcp_radius_px = 0;
   // Then a colour-weighted median over the filled pixels (optimize::WeightedMedianOfFilled):
   // window half-size (0 = off) and colour sigma (intensities in [0, 1]).
   int left_right_median_radius_px = 0;

@@ -37,6 +37,20 @@ cv::Mat LeftRightConsistent(const cv::Mat& left_disparity, const cv::Mat& right_
 int FillFromBackground(const cv::Mat& consistent, int max_run_px, cv::Mat* values,
                        cv::Mat* disparity);
 
+// Undoes the fill where a GCP contradicts it, after FillFromBackground. For each pixel where
+// `consistent` is 0 and the fill changed the disparity, the nearest GCP within `radius_px`
+// (Euclidean; `gcp_disparity` CV_32F, NaN where there is none; ties go to the first in row-major
+// order) is compared with the disparity before the fill and after it: when it is closer to the one
+// before, the pixel takes back its value and disparity from `values_before` / `disparity_before`
+// and is marked consistent (255) in `consistent`, so that a later median leaves it alone.
+// A GCP is a measurement, the row fill a guess: thin foreground that the other view lost (a pole,
+// a tree trunk) is inconsistent, and the fill would replace it by the background beside it, while
+// the LiDAR points on it say where it is. In a true half-occluded band the GCPs lie on the
+// background and confirm the fill. Returns the number of pixels restored.
+int RestoreGcpConfirmed(const cv::Mat& gcp_disparity, int radius_px,
+                        const cv::Mat& values_before, const cv::Mat& disparity_before,
+                        cv::Mat* consistent, cv::Mat* values, cv::Mat* disparity);
+
 // Smooths the pixels where `consistent` is 0 after FillFromBackground: each takes the weighted
 // median of `disparity` over the (2·radius_px + 1)² window around it, weighted by colour
 // similarity, w = exp(−‖I_p − I_q‖² / σ²) with I the BGR image in [0, 1] and σ = sigma_colour,

@@ -9,6 +9,23 @@ namespace gcpstereo::propagation {
 
 // Options of the adaptive propagation (paper §3.1, eq. 5). YAML keys propagation.*.
 struct PropagationOptions {
+  // How D̂ is computed from the GCPs. Key propagation.method.
+  //   "linear_system": the paper's eq. 5 (Propagate below), a smooth interpolation: every pixel
+  //     is the affinity-weighted mean of its neighbours, so where a depth edge has no colour edge
+  //     under it, or the GCPs' edge is a few pixels off the image's, D̂ blends the two sides.
+  //   "weighted_median": each pixel takes the weighted median of the GCPs within median_radius_px
+  //     (PropagateByWeightedMedian). Not in the paper. A median never invents a value between two
+  //     surfaces, so thin foreground and depth edges measured by dense GCPs (a LiDAR scan) stay
+  //     where the GCPs put them; pixels without a GCP in their window get no prior. Measured on
+  //     the KITTI frames in configs/kitti_lidar.yaml.
+  std::string method = "linear_system";
+  // weighted_median: window half-size, spatial and colour bandwidths of the weights
+  // w = exp(−d² / (2 σs²) − ‖I_p − I_q‖² / (2 σc²)), d in px, I in RGB grey levels (0…255).
+  // Valid: radius in [1, 100], both sigmas > 0. Keys propagation.median_radius_px,
+  // propagation.median_sigma_px, propagation.median_sigma_colour.
+  int median_radius_px = 10;
+  double median_sigma_px = 4.0;
+  double median_sigma_colour = 20.0;
   // γ of eq. 5 (the colour bandwidth of w_pq = max(exp(−‖I_p − I_q‖₂ / γ), ε)), in RGB grey levels
   // (0…255 per channel). Paper: 1.25 (its colour unit is not stated); in 8-bit units that makes
   // the affinities nearly binary. Default 4, measured (tools/benchmark.py --suite table2, D̂ from
@@ -74,7 +91,19 @@ struct PropagationResult {
 // 8-connected regions (over the remaining links) that contain no GCP are found by a traversal
 // before solving, removed from the system (otherwise it is singular) and reported as NaN /
 // num_unreached_*. Throws Error on bad inputs and when the solver fails.
+//
+// options.method = "weighted_median" dispatches to PropagateByWeightedMedian.
 PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
                             const PropagationOptions& options);
+
+// D̂ as a joint-bilateral weighted median of the GCPs (options.method "weighted_median"): pixel p
+// takes the value v of a GCP q within the (2r+1)² window (r = median_radius_px) at which the
+// cumulative weight of the window's GCPs, sorted by value, first reaches half of their total,
+// w_q = exp(−‖p − q‖² / (2 σs²) − ‖I_p − I_q‖² / (2 σc²)); ties in value keep the raster order.
+// GCP pixels hold their own value. Pixels with no GCP in their window are NaN and counted as
+// unreached (regions: 8-connected). Same inputs, outputs and errors as Propagate; `solver` is
+// "weighted median", `num_unknowns` the number of pixels computed, residual 0.
+PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
+                                            const PropagationOptions& options);
 
 }  // namespace gcpstereo::propagation
