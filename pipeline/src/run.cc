@@ -131,12 +131,16 @@ cv::Mat MirroredPartnerGcpLabels(const GcpSet& gcps, const LabelSpace& labels,
   return sparse;
 }
 
-// The reference image in grey with the pixels that failed the left-right check in red.
-cv::Mat RenderInconsistent(const cv::Mat& image_bgr, const cv::Mat& consistent) {
+// The reference image in grey with the pixels that failed the left-right check in red, and in
+// yellow those of them that kept their value because a GCP confirmed it (`after` = the mask once
+// optimize::RestoreGcpConfirmed has run).
+cv::Mat RenderInconsistent(const cv::Mat& image_bgr, const cv::Mat& consistent,
+                           const cv::Mat& after) {
   cv::Mat grey, picture;
   cv::cvtColor(image_bgr, grey, cv::COLOR_BGR2GRAY);
   cv::cvtColor(grey, picture, cv::COLOR_GRAY2BGR);
   picture.setTo(cv::Scalar(0, 0, 255), consistent == 0);
+  picture.setTo(cv::Scalar(0, 255, 255), (consistent == 0) & (after != 0));
   return picture;
 }
 
@@ -539,7 +543,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
           reference.image, checked, options.optimizer.left_right_median_radius_px,
           options.optimizer.left_right_median_sigma, &optimized.labels, &own_disparity);
     }
-    inconsistent_preview = RenderInconsistent(reference.image, consistent);
+    inconsistent_preview = RenderInconsistent(reference.image, consistent, checked);
     spdlog::info("left-right check: {} pixels ({:.2f} %) inconsistent, {} filled, {} kept by GCPs",
                  inconsistent, 100.0 * inconsistent / size.area(), filled, restored);
     clock.Done({{"max_difference_px", options.optimizer.left_right_max_difference_px},

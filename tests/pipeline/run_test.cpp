@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -181,6 +183,37 @@ TEST(MiddleburyRun, LeftRightCheckFillsHalfOccludedBands) {
   EXPECT_EQ(stage["max_fill_run_px"].get<int>(), 15);
   EXPECT_TRUE(fs::exists(dir + "/with/left_right_check.png"));
   EXPECT_FALSE(without["stages"].contains("left_right_check"));
+}
+
+// KITTI frame 10 at half size (5 s a run): the weighted-median D̂ and the GCP-confirmed fill of
+// kitti_lidar.yaml against the paper's linear-system D̂ without it. Measured: held-out bad-3
+// 2.08 % against 3.67 % (and 2.49 % against 5.45 % at full size).
+TEST(KittiRun, MedianPriorAndGcpConfirmedFillFollowTheScan) {
+  GCPSTEREO_REQUIRE_SHARED_DATA(drive, "kitti/2011_09_26/2011_09_26_drive_0009_sync");
+  const std::string dir = testing::MakeTempDir("gcpstereo-kitti");
+  auto run = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> overrides = {
+        "dataset.path=" + drive, "dataset.reference=0000000010",
+        "gcp.lidar.path=" + drive + "/velodyne_points/data/0000000010.bin",
+        "eval.lidar_holdout=true", "dataset.scale=0.5", "labels.max=63", "labels.count=64",
+        "runtime.log_level=warn"};
+    overrides.insert(overrides.end(), extra.begin(), extra.end());
+    LoadedConfig config;
+    config.Load((fs::path(GCPSTEREO_SOURCE_DIR) / "configs" / "kitti_lidar.yaml").string(),
+                overrides);
+    return nlohmann::json::parse(RunPipeline(config, dir + "/" + name, "(test)").report_json);
+  };
+  const nlohmann::json shipped = run("shipped", {});
+  const nlohmann::json paper = run("linear", {"propagation.method=linear_system",
+                                              "optimizer.left_right_gcp_radius_px=0"});
+  auto bad3 = [](const nlohmann::json& report, const char* map) {
+    return report["metrics"]["lidar_holdout"][map]["bad3_percent"].get<double>();
+  };
+  EXPECT_LT(bad3(shipped, "result"), bad3(paper, "result") - 1.0);
+  EXPECT_LT(bad3(shipped, "propagated"), bad3(paper, "propagated") - 1.0);
+  EXPECT_EQ(shipped["stages"]["propagation"]["solver"], "weighted median");
+  EXPECT_GT(shipped["stages"]["left_right_check"]["gcp_restored_pixels"].get<int>(), 0);
+  EXPECT_EQ(paper["stages"]["left_right_check"]["gcp_restored_pixels"].get<int>(), 0);
 }
 
 }  // namespace
