@@ -240,12 +240,13 @@ void PipelineConfig::Register(config::Schema* s) {
       "optimizer.left_right_max_difference_px", &optimizer.left_right_max_difference_px,
       Range::AtLeast(0.0),
       {"largest disparity difference between the two views that still counts as consistent", "px"});
-  s->Add("optimizer.left_right_gcp_radius_px", &optimizer.left_right_gcp_radius_px,
-         Range::Between(0, 100),
-         {"after the left-right fill, a filled pixel keeps its optimised value when the nearest GCP "
-          "within this radius is closer to that value than to the fill's (0 = off): thin "
-          "foreground the other view lost stays where the GCPs measure it",
-          "px"});
+  s->Add(
+      "optimizer.left_right_gcp_radius_px", &optimizer.left_right_gcp_radius_px,
+      Range::Between(0, 100),
+      {"after the left-right fill, a filled pixel keeps its optimised value when the nearest GCP "
+       "within this radius is closer to that value than to the fill's (0 = off): thin "
+       "foreground the other view lost stays where the GCPs measure it",
+       "px"});
   s->Add("optimizer.left_right_median_radius_px", &optimizer.left_right_median_radius_px,
          Range::Between(0, 50),
          {"after the left-right fill, a colour-weighted median over the filled pixels in a "

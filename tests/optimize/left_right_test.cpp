@@ -161,8 +161,8 @@ TEST(LeftRightCheck, GcpsOnThinForegroundUndoTheFill) {
   }
   // Radius 4: every pole pixel of the three rows has the pole GCP as its nearest (column 30 of
   // row 1 is 1 px from it and 4 px from the background GCP).
-  const int restored = RestoreGcpConfirmed(gcps, 4, values_before, left_before, &consistent,
-                                           &values, &left);
+  const int restored =
+      RestoreGcpConfirmed(gcps, 4, values_before, left_before, &consistent, &values, &left);
   EXPECT_EQ(restored, kRows * 3);
   EXPECT_EQ(cv::norm(left, left_before, cv::NORM_INF), 0.0);
   EXPECT_EQ(cv::norm(values, values_before, cv::NORM_INF), 0.0);
@@ -181,8 +181,7 @@ TEST(LeftRightCheck, GcpsOnThinForegroundUndoTheFill) {
     band_gcps.at<float>(r, 17) = kBack + 0.3f;  // in the band: 0–2 px from its pixels
     band_gcps.at<float>(r, 22) = kFore;         // on the foreground: 3–6 px from them
   }
-  EXPECT_EQ(RestoreGcpConfirmed(band_gcps, 8, fat_before, fat_before, &mask, &fat_values, &fat),
-            0);
+  EXPECT_EQ(RestoreGcpConfirmed(band_gcps, 8, fat_before, fat_before, &mask, &fat_values, &fat), 0);
   EXPECT_EQ(cv::norm(fat, TrueLeft(), cv::NORM_INF), 0.0);
   // Without the background GCP the foreground one is the nearest, and the fattening comes back:
   // the rule trusts the measurement, so GCPs must be visible in the reference view.

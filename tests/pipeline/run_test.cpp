@@ -193,9 +193,13 @@ TEST(KittiRun, MedianPriorAndGcpConfirmedFillFollowTheScan) {
   const std::string dir = testing::MakeTempDir("gcpstereo-kitti");
   auto run = [&](const std::string& name, std::vector<std::string> extra) {
     std::vector<std::string> overrides = {
-        "dataset.path=" + drive, "dataset.reference=0000000010",
+        "dataset.path=" + drive,
+        "dataset.reference=0000000010",
         "gcp.lidar.path=" + drive + "/velodyne_points/data/0000000010.bin",
-        "eval.lidar_holdout=true", "dataset.scale=0.5", "labels.max=63", "labels.count=64",
+        "eval.lidar_holdout=true",
+        "dataset.scale=0.5",
+        "labels.max=63",
+        "labels.count=64",
         "runtime.log_level=warn"};
     overrides.insert(overrides.end(), extra.begin(), extra.end());
     LoadedConfig config;
@@ -204,8 +208,8 @@ TEST(KittiRun, MedianPriorAndGcpConfirmedFillFollowTheScan) {
     return nlohmann::json::parse(RunPipeline(config, dir + "/" + name, "(test)").report_json);
   };
   const nlohmann::json shipped = run("shipped", {});
-  const nlohmann::json paper = run("linear", {"propagation.method=linear_system",
-                                              "optimizer.left_right_gcp_radius_px=0"});
+  const nlohmann::json paper =
+      run("linear", {"propagation.method=linear_system", "optimizer.left_right_gcp_radius_px=0"});
   auto bad3 = [](const nlohmann::json& report, const char* map) {
     return report["metrics"]["lidar_holdout"][map]["bad3_percent"].get<double>();
   };

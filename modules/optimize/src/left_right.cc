@@ -90,9 +90,9 @@ int FillFromBackground(const cv::Mat& consistent, int max_run_px, cv::Mat* value
   return filled;
 }
 
-int RestoreGcpConfirmed(const cv::Mat& gcp_disparity, int radius_px,
-                        const cv::Mat& values_before, const cv::Mat& disparity_before,
-                        cv::Mat* consistent, cv::Mat* values, cv::Mat* disparity) {
+int RestoreGcpConfirmed(const cv::Mat& gcp_disparity, int radius_px, const cv::Mat& values_before,
+                        const cv::Mat& disparity_before, cv::Mat* consistent, cv::Mat* values,
+                        cv::Mat* disparity) {
   Require(consistent != nullptr && values != nullptr && disparity != nullptr,
           "RestoreGcpConfirmed: null output");
   Require(consistent->type() == CV_8U && gcp_disparity.type() == CV_32F &&

@@ -27,6 +27,7 @@
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/propagation/sparse_solver.h"
+#include "propagation_internal.h"
 
 namespace gcpstereo::propagation {
 namespace {
@@ -181,10 +182,8 @@ void PropagationOptions::Check() const {
   }
 }
 
-namespace {
-
-PropagationResult PropagateWith(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
-                                const PropagationOptions& options) {
+void internal::CheckPropagationInputs(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
+                                      const PropagationOptions& options) {
   options.Check();
   if (image_bgr.empty() || image_bgr.type() != CV_8UC3) {
     throw Error("Propagate: the image must be a non-empty CV_8UC3 (BGR) image");
@@ -193,6 +192,13 @@ PropagationResult PropagateWith(const cv::Mat& image_bgr, const cv::Mat& sparse_
     throw Error("Propagate: sparse_values must be CV_32F of the image size " +
                 std::to_string(image_bgr.cols) + "x" + std::to_string(image_bgr.rows));
   }
+}
+
+namespace {
+
+PropagationResult PropagateWith(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
+                                const PropagationOptions& options) {
+  internal::CheckPropagationInputs(image_bgr, sparse_values, options);
   const SparseSolverKind kind = ParseSparseSolverKind(options.solver);
   const auto setup_start = std::chrono::steady_clock::now();
   const int width = image_bgr.cols;

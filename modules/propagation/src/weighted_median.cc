@@ -11,8 +11,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "gcpstereo/core/error.h"
 #include "gcpstereo/propagation/propagation.h"
+#include "propagation_internal.h"
 
 namespace gcpstereo::propagation {
 namespace {
@@ -26,14 +26,7 @@ struct Sample {
 
 PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
                                             const PropagationOptions& options) {
-  options.Check();
-  if (image_bgr.empty() || image_bgr.type() != CV_8UC3) {
-    throw Error("Propagate: the image must be a non-empty CV_8UC3 (BGR) image");
-  }
-  if (sparse_values.type() != CV_32F || sparse_values.size() != image_bgr.size()) {
-    throw Error("Propagate: sparse_values must be CV_32F of the image size " +
-                std::to_string(image_bgr.cols) + "x" + std::to_string(image_bgr.rows));
-  }
+  internal::CheckPropagationInputs(image_bgr, sparse_values, options);
   const auto start = std::chrono::steady_clock::now();
   const int width = image_bgr.cols, height = image_bgr.rows;
   const int radius = options.median_radius_px;
@@ -44,17 +37,19 @@ PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::
   result.solver = "weighted median";
   for (int r = 0; r < height; ++r) {
     const float* row = sparse_values.ptr<float>(r);
-    result.num_gcps += static_cast<int>(
-        std::count_if(row, row + width, [](float v) { return std::isfinite(v); }));
+    result.num_gcps +=
+        static_cast<int>(std::count_if(row, row + width, [](float v) { return std::isfinite(v); }));
   }
-  result.values = cv::Mat(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  result.values =
+      cv::Mat(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
   result.reached = cv::Mat(height, width, CV_8U, cv::Scalar(0));
 
   // The spatial weights of the window, once.
   std::vector<double> spatial((2 * radius + 1) * (2 * radius + 1));
   for (int dy = -radius; dy <= radius; ++dy) {
     for (int dx = -radius; dx <= radius; ++dx) {
-      spatial[(dy + radius) * (2 * radius + 1) + dx + radius] = std::exp(-(dx * dx + dy * dy) * inv_2ss);
+      spatial[(dy + radius) * (2 * radius + 1) + dx + radius] =
+          std::exp(-(dx * dx + dy * dy) * inv_2ss);
     }
   }
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
@@ -76,7 +71,7 @@ PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::
         for (int y = std::max(0, r - radius); y <= std::min(height - 1, r + radius); ++y) {
           const float* values = sparse_values.ptr<float>(y);
           const cv::Vec3b* pixels = image_bgr.ptr<cv::Vec3b>(y);
-          const double* spatial_row = &spatial[(y - r + radius) * (2 * radius + 1) + radius - c];
+          const int spatial_row = (y - r + radius) * (2 * radius + 1) + radius;  // dx = 0
           for (int x = std::max(0, c - radius); x <= std::min(width - 1, c + radius); ++x) {
             if (!std::isfinite(values[x])) continue;
             double colour_distance2 = 0.0;
@@ -84,7 +79,7 @@ PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::
               const double d = static_cast<double>(pixels[x][k]) - colour[k];
               colour_distance2 += d * d;
             }
-            const double w = spatial_row[x] * std::exp(-colour_distance2 * inv_2sc);
+            const double w = spatial[spatial_row + x - c] * std::exp(-colour_distance2 * inv_2sc);
             samples.push_back({values[x], w});
             total += w;
           }

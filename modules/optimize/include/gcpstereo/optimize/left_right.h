@@ -47,9 +47,9 @@ int FillFromBackground(const cv::Mat& consistent, int max_run_px, cv::Mat* value
 // a tree trunk) is inconsistent, and the fill would replace it by the background beside it, while
 // the LiDAR points on it say where it is. In a true half-occluded band the GCPs lie on the
 // background and confirm the fill. Returns the number of pixels restored.
-int RestoreGcpConfirmed(const cv::Mat& gcp_disparity, int radius_px,
-                        const cv::Mat& values_before, const cv::Mat& disparity_before,
-                        cv::Mat* consistent, cv::Mat* values, cv::Mat* disparity);
+int RestoreGcpConfirmed(const cv::Mat& gcp_disparity, int radius_px, const cv::Mat& values_before,
+                        const cv::Mat& disparity_before, cv::Mat* consistent, cv::Mat* values,
+                        cv::Mat* disparity);
 
 // Smooths the pixels where `consistent` is 0 after FillFromBackground: each takes the weighted
 // median of `disparity` over the (2·radius_px + 1)² window around it, weighted by colour
