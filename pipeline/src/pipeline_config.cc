@@ -175,6 +175,12 @@ void PipelineConfig::Register(config::Schema* s) {
          {"rectified pair: census window side added to BT (odd; 1 = BT alone, the paper)", "px"});
   s->Add("cost.census_weight", &cost.birchfield_tomasi.census_weight, Range::AtLeast(0.0),
          {"rectified pair: cost of one differing census bit", "grey levels"});
+  s->Add("cost.census_mask_threshold", &cost.birchfield_tomasi.census_mask_threshold,
+         Range::Between(0, 255),
+         {"rectified pair: census bits only from neighbours within this many grey levels of the "
+          "centre in the reference image, scaled to the full count (0 = every bit): neighbours "
+          "across a depth edge no longer pull the cost toward the other surface",
+          "grey levels"});
   AddCostFilterKeys(s, "cost.", "rectified pair", &cost.birchfield_tomasi.window);
   AddCostFilterKeys(s, "cost.sweep_", "plane sweep", &cost.plane_sweep.window);
 

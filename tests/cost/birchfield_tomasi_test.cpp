@@ -251,6 +251,66 @@ TEST(BirchfieldTomasiCensus, InvariantToMonotonicIntensityChange) {
   EXPECT_GT(mean_bt, 20.0);
 }
 
+// A background (grey 90…130, disparity 1) with a bright foreground square (190…230, disparity 4) at
+// left columns [20, 30). Right of the square the background is seen by both views, but the census
+// window of a pixel 1–3 px from the edge still holds foreground neighbours, whose bits disagree
+// with the background the right view shows there. The masked census (threshold 40 separates the
+// two surfaces) ignores them: the cost at the true disparity is exactly 0, where the full census
+// mostly pays for them. With a threshold that keeps every neighbour the mask changes nothing.
+TEST(BirchfieldTomasiCensus, MaskIgnoresNeighboursAcrossADepthEdge) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> background(90, 130), foreground(190, 230);
+  const int w = 48, h = 16;
+  cv::Mat back(h, w + 8, CV_8UC1), fore(h, w + 8, CV_8UC1);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w + 8; ++c) {
+      back.at<std::uint8_t>(r, c) = background(rng);
+      fore.at<std::uint8_t>(r, c) = foreground(rng);
+    }
+  }
+  cv::Mat left(h, w, CV_8UC1), right(h, w, CV_8UC1);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      left.at<std::uint8_t>(r, c) =
+          c >= 20 && c < 30 ? fore.at<std::uint8_t>(r, c) : back.at<std::uint8_t>(r, c);
+      // Right pixel c shows the foreground where c + 4 is in [20, 30), else the background at c
+      // + 1.
+      right.at<std::uint8_t>(r, c) = c + 4 >= 20 && c + 4 < 30 ? fore.at<std::uint8_t>(r, c + 4)
+                                                               : back.at<std::uint8_t>(r, c + 1);
+    }
+  }
+  BirchfieldTomasiOptions options;
+  options.census_window_px = 7;
+  options.census_weight = 2.0;
+  options.truncation = 60;
+  const std::vector<double> d = {0, 1, 2, 3, 4, 5};
+  const cv::Rect all(0, 0, w, h);
+  const CostVolume full = ComputeBirchfieldTomasiCost(left, right, d, all, options);
+  options.census_mask_threshold = 40;
+  const CostVolume masked = ComputeBirchfieldTomasiCost(left, right, d, all, options);
+  // A foreground neighbour is brighter than the centre (bit 0); the background the right view shows
+  // in its place is darker than the centre (bit 1) about half the time, so the full census pays on
+  // most of these pixels, the masked one on none.
+  int full_pays = 0, counted = 0;
+  for (int r = 3; r < h - 3; ++r) {
+    for (int c = 31; c <= 33; ++c) {  // background pixels with foreground in their window
+      EXPECT_EQ(masked.Cost(r, c, 1), 0.0f) << r << "," << c;
+      full_pays += full.Cost(r, c, 1) > 0.0f;
+      ++counted;
+    }
+  }
+  EXPECT_GT(full_pays, counted / 2) << full_pays << " of " << counted;
+  options.census_mask_threshold = 255;
+  const CostVolume keep_all = ComputeBirchfieldTomasiCost(left, right, d, all, options);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      for (int l = 0; l < static_cast<int>(d.size()); ++l) {
+        ASSERT_EQ(keep_all.Cost(r, c, l), full.Cost(r, c, l)) << r << "," << c << "," << l;
+      }
+    }
+  }
+}
+
 TEST(BirchfieldTomasiCensus, BadOptionsNameTheKey) {
   auto message = [](const BirchfieldTomasiOptions& o) {
     try {
@@ -270,6 +330,11 @@ TEST(BirchfieldTomasiCensus, BadOptionsNameTheKey) {
   o = {};
   o.census_weight = -1;
   EXPECT_EQ(message(o), "cost.census_weight = -1. Violated constraint: 0 <= census_weight < inf");
+  o = {};
+  o.census_mask_threshold = 256;
+  EXPECT_EQ(message(o),
+            "cost.census_mask_threshold = 256. Violated constraint: 0 <= census_mask_threshold "
+            "<= 255");
   o = {};
   o.window.window_px = 2;
   EXPECT_EQ(message(o), "cost.window_px = 2. Violated constraint: odd and 1 <= window_px <= 101");

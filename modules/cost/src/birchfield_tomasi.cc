@@ -30,6 +30,11 @@ void BirchfieldTomasiOptions::Check() const {
     throw ConfigError(ViolatedConstraint("cost.census_weight", internal::Str(census_weight),
                                          "0 <= census_weight < inf"));
   }
+  if (census_mask_threshold < 0 || census_mask_threshold > 255) {
+    throw ConfigError(ViolatedConstraint("cost.census_mask_threshold",
+                                         internal::Str(census_mask_threshold),
+                                         "0 <= census_mask_threshold <= 255"));
+  }
   window.Check("cost.");
 }
 
@@ -65,32 +70,49 @@ inline float Dissimilarity(const Triplet& l, const Triplet& r) {
   return std::min(left_to_right, right_to_left);
 }
 
-// Census transform (Zabih & Woodfill 1994) of the rows [y0, y0 + rows) of a grey image over a
-// side × side window, border replicated: bit i is set when neighbour i is darker than the centre.
-cv::Mat CensusRows(const cv::Mat& grey, int y0, int rows, int side) {
-  cv::Mat census(rows, grey.cols, CV_64F);  // 64-bit words stored in a CV_64F-sized Mat
+// A bit string over the side × side window of each pixel of the rows [y0, y0 + rows) of a grey
+// image, border replicated, neighbours in raster order without the centre: bit i is
+// bit(neighbour i, centre).
+template <typename Bit>
+cv::Mat WindowBitsRows(const cv::Mat& grey, int y0, int rows, int side, Bit bit) {
+  cv::Mat words(rows, grey.cols, CV_64F);  // 64-bit words stored in a CV_64F-sized Mat
   const int h = side / 2;
   for (int r = 0; r < rows; ++r) {
-    std::uint64_t* out = census.ptr<std::uint64_t>(r);
+    std::uint64_t* out = words.ptr<std::uint64_t>(r);
     const int y = y0 + r;
     const std::uint8_t* centre_row = grey.ptr<std::uint8_t>(y);
     for (int x = 0; x < grey.cols; ++x) {
-      const std::uint8_t centre = centre_row[x];
+      const int centre = centre_row[x];
       std::uint64_t bits = 0;
       for (int dy = -h; dy <= h; ++dy) {
         const std::uint8_t* row = grey.ptr<std::uint8_t>(std::clamp(y + dy, 0, grey.rows - 1));
         for (int dx = -h; dx <= h; ++dx) {
           if (dx == 0 && dy == 0) continue;
-          bits = (bits << 1) | (row[std::clamp(x + dx, 0, grey.cols - 1)] < centre ? 1u : 0u);
+          bits = (bits << 1) | (bit(row[std::clamp(x + dx, 0, grey.cols - 1)], centre) ? 1u : 0u);
         }
       }
       out[x] = bits;
     }
   }
-  return census;
+  return words;
 }
 
-inline int Hamming(std::uint64_t a, std::uint64_t b) { return __builtin_popcountll(a ^ b); }
+// Census transform (Zabih & Woodfill 1994): bit i is set when neighbour i is darker than the
+// centre.
+cv::Mat CensusRows(const cv::Mat& grey, int y0, int rows, int side) {
+  return WindowBitsRows(grey, y0, rows, side, [](int n, int c) { return n < c; });
+}
+
+// The census mask (census_mask_threshold): bit i is set when neighbour i is within `threshold`
+// grey levels of the centre.
+cv::Mat CensusMaskRows(const cv::Mat& grey, int y0, int rows, int side, int threshold) {
+  return WindowBitsRows(grey, y0, rows, side,
+                        [threshold](int n, int c) { return std::abs(n - c) <= threshold; });
+}
+
+inline int Hamming(std::uint64_t a, std::uint64_t b, std::uint64_t mask) {
+  return __builtin_popcountll((a ^ b) & mask);
+}
 
 // The pixel-wise cost (BT, plus census when configured) of `region`.
 CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
@@ -109,7 +131,7 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
   CostVolume volume(region, num_labels, max_cost);
   const float inv_step = 1.0f / volume.cost_step();
 
-  cv::Mat census_left, census_right;
+  cv::Mat census_left, census_right, mask_left;
   if (use_census) {
     cv::Mat grey_left = left, grey_right = right;
     if (channels == 3) {
@@ -118,7 +140,12 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
     }
     census_left = CensusRows(grey_left, region.y, region.height, census_side);
     census_right = CensusRows(grey_right, region.y, region.height, census_side);
+    if (options.census_mask_threshold > 0) {
+      mask_left = CensusMaskRows(grey_left, region.y, region.height, census_side,
+                                 options.census_mask_threshold);
+    }
   }
+  const int census_bits = census_side * census_side - 1;
 
   tbb::parallel_for(
       tbb::blocked_range<int>(0, region.height, 1),
@@ -134,6 +161,8 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
               use_census ? census_left.ptr<std::uint64_t>(row_local) : nullptr;
           const std::uint64_t* census_r =
               use_census ? census_right.ptr<std::uint64_t>(row_local) : nullptr;
+          const std::uint64_t* masks =
+              mask_left.empty() ? nullptr : mask_left.ptr<std::uint64_t>(row_local);
           for (int x = 0; x < width; ++x) {
             for (int ch = 0; ch < channels; ++ch) {
               left_triplets[x * channels + ch] = TripletAt(left_row, channels, ch, width, x);
@@ -163,15 +192,24 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
               cost = std::min(cost, truncation);
               if (use_census) {
                 const int x0 = static_cast<int>(std::floor(xr));
-                const float hamming0 = static_cast<float>(Hamming(census_l[x], census_r[x0]));
+                std::uint64_t mask = ~std::uint64_t{0};
+                float scale = 1.0f;
+                if (masks != nullptr) {
+                  const int kept = __builtin_popcountll(masks[x]);
+                  if (4 * kept >= census_bits) {
+                    mask = masks[x];
+                    scale = static_cast<float>(census_bits) / static_cast<float>(kept);
+                  }
+                }
+                const float hamming0 = static_cast<float>(Hamming(census_l[x], census_r[x0], mask));
                 float hamming = hamming0;
                 if (!integer) {
                   const float f = static_cast<float>(xr - x0);
                   const float hamming1 = static_cast<float>(
-                      Hamming(census_l[x], census_r[std::min(x0 + 1, width - 1)]));
+                      Hamming(census_l[x], census_r[std::min(x0 + 1, width - 1)], mask));
                   hamming = hamming0 + (hamming1 - hamming0) * f;
                 }
-                cost += census_weight * hamming;
+                cost += census_weight * scale * hamming;
               }
               entry = internal::Quantise(cost, inv_step);
             }

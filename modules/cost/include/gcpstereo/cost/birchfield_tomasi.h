@@ -30,6 +30,15 @@ struct BirchfieldTomasiOptions {
   // [cost.census_weight]: cost of one differing census bit, in the grey levels of the BT term.
   // Range: census_weight >= 0.
   double census_weight = 2.0;
+  // [cost.census_mask_threshold]: census bits only from the neighbours whose grey level differs
+  // from the centre's by at most this many levels, in the reference image; 0 = every bit. Near a
+  // depth edge, the neighbours across it usually differ in colour and belong to the other surface:
+  // at the true disparity their bits disagree between the views and pull the cost toward the
+  // other surface's disparity (foreground fattening). The Hamming distance over the kept bits is
+  // scaled by (all bits / kept bits) to stay comparable between pixels; a pixel with fewer than a
+  // quarter of its bits kept (a bright speck) uses them all. Not in the paper. Measured on
+  // Middlebury (configs/middlebury_stereo.yaml). Range: 0 <= threshold <= 255.
+  int census_mask_threshold = 0;
   // [cost.window_px], [cost.window_filter], [cost.guided_epsilon]: aggregation of the pixel cost
   // over a window (see cost_filter.h); window_px 1 = pixel-wise (the paper).
   CostFilterOptions window;
@@ -51,19 +60,19 @@ struct BirchfieldTomasiOptions {
 // Extensions beyond the paper (both off by default): options.census_window_px > 1 adds
 // census_weight · Hamming(census of L at x, census of R at x_r) (grey census, bit = neighbour
 // darker than the centre, border replicated; fractional x_r interpolates the Hamming distances of
-// the two integer neighbours linearly); options.window filters each disparity's slice with a box or
-// guided filter (FilterCostVolume) — the pixel costs are then computed on `region` grown by the
-// filter's margin (clipped to the image), so a tile's costs equal the whole image's.
-// Quantisation: max_cost = truncation + census_weight · (census_window_px² − 1); 16-bit step
-// max_cost / 65534 (CostVolume).
-// Fractional d: R(x_r) and R(x_r ± ½) are sampled by linear interpolation (integer d reduces to the
-// textbook definition). Border policy: x_r outside [0, width−1] → no data (CostVolume::kNoData);
-// half-pixel neighbours beyond the border replicate the border pixel.
-// The volume covers `region` of `left`; label l is disparities_px[l]; max_cost = truncation
-// without census.
-// Images: CV_8UC3 (BGR) or CV_8UC1, same type and size. Rows are computed in parallel; the result
-// does not depend on the thread count. Throws Error for bad images, an empty disparity list, a
-// non-finite disparity or a region outside `left`; ConfigError for bad options.
+// the two integer neighbours linearly; options.census_mask_threshold > 0 counts only the bits of
+// the neighbours of similar grey level in `left`, scaled to the full count); options.window filters
+// each disparity's slice with a box or guided filter (FilterCostVolume) — the pixel costs are then
+// computed on `region` grown by the filter's margin (clipped to the image), so a tile's costs equal
+// the whole image's. Quantisation: max_cost = truncation + census_weight · (census_window_px² − 1);
+// 16-bit step max_cost / 65534 (CostVolume). Fractional d: R(x_r) and R(x_r ± ½) are sampled by
+// linear interpolation (integer d reduces to the textbook definition). Border policy: x_r outside
+// [0, width−1] → no data (CostVolume::kNoData); half-pixel neighbours beyond the border replicate
+// the border pixel. The volume covers `region` of `left`; label l is disparities_px[l]; max_cost =
+// truncation without census. Images: CV_8UC3 (BGR) or CV_8UC1, same type and size. Rows are
+// computed in parallel; the result does not depend on the thread count. Throws Error for bad
+// images, an empty disparity list, a non-finite disparity or a region outside `left`; ConfigError
+// for bad options.
 CostVolume ComputeBirchfieldTomasiCost(const cv::Mat& left, const cv::Mat& right,
                                        const std::vector<double>& disparities_px,
                                        const cv::Rect& region,
