@@ -202,6 +202,12 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
         "birchfield_tomasi (here: " +
         cost_method + ")");
   }
+  if (!options.optimizer.left_right_check && (options.optimizer.left_right_gcp_radius_px > 0 ||
+                                              options.optimizer.left_right_median_radius_px > 0)) {
+    spdlog::warn(
+        "optimizer.left_right_gcp_radius_px and left_right_median_radius_px act on the left-right "
+        "check's fill: without optimizer.left_right_check they have no effect");
+  }
   load_clock.Done();
 
   // Writes the report and the effective configuration and moves every output into place.
