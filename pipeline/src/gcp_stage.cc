@@ -192,6 +192,15 @@ cv::Mat SparseGcpLabels(const GcpSet& gcps, const LabelSpace& labels, cv::Size s
   return sparse;
 }
 
+cv::Mat SparseGcpDisparity(const GcpSet& gcps, double numerator, cv::Size size) {
+  cv::Mat sparse(size, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  for (const Gcp& g : gcps.points) {
+    if (g.row < 0 || g.col < 0 || g.row >= size.height || g.col >= size.width) continue;
+    sparse.at<float>(g.row, g.col) = static_cast<float>(numerator / g.depth);
+  }
+  return sparse;
+}
+
 cv::Mat LabelMapToDepth(const cv::Mat& labels, const LabelSpace& space) {
   cv::Mat float_labels;
   labels.convertTo(float_labels, CV_32F);

@@ -273,10 +273,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                       {"depth_of_last_label", labels.DepthOfLabel(labels.count() - 1)}};
   // GCP quality against the ground truth (the paper's Table 1: outliers = |error| > 1 px).
   if (!gcps.empty() && dataset.ground_truth.HasDisparity()) {
-    cv::Mat sparse(size, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-    for (const Gcp& g : gcps.points) {
-      sparse.at<float>(g.row, g.col) = static_cast<float>(dataset.disparity_numerator / g.depth);
-    }
+    const cv::Mat sparse = internal::SparseGcpDisparity(gcps, dataset.disparity_numerator, size);
     const gcp::GcpOutlierStats stats =
         gcp::ComputeOutlierStats(sparse, dataset.ground_truth.disparity, 1.0);
     report["gcps"]["outliers"] = {{"definition", "|disparity - gt| > 1 px"},
@@ -527,21 +524,18 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     const auto [min_disparity, max_disparity] =
         std::minmax_element(pair_disparities.begin(), pair_disparities.end());
     const int max_run_px = static_cast<int>(std::ceil(*max_disparity - *min_disparity));
-    const cv::Mat labels_before_fill = optimized.labels.clone();
-    const cv::Mat disparity_before_fill = own_disparity.clone();
-    cv::Mat checked = consistent.clone();
+    const bool restore = options.optimizer.left_right_gcp_radius_px > 0;
+    const cv::Mat labels_before_fill = restore ? optimized.labels.clone() : cv::Mat();
+    const cv::Mat disparity_before_fill = restore ? own_disparity.clone() : cv::Mat();
+    cv::Mat checked = consistent.clone();  // becomes 255 where a GCP keeps the optimised value
     const int filled =
         optimize::FillFromBackground(checked, max_run_px, &optimized.labels, &own_disparity);
     int restored = 0;
-    if (options.optimizer.left_right_gcp_radius_px > 0) {
-      cv::Mat gcp_disparity(size, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-      for (const Gcp& g : gcps.points) {
-        gcp_disparity.at<float>(g.row, g.col) =
-            static_cast<float>(dataset.disparity_numerator / g.depth);
-      }
+    if (restore) {
       restored = optimize::RestoreGcpConfirmed(
-          gcp_disparity, options.optimizer.left_right_gcp_radius_px, labels_before_fill,
-          disparity_before_fill, &checked, &optimized.labels, &own_disparity);
+          internal::SparseGcpDisparity(gcps, dataset.disparity_numerator, size),
+          options.optimizer.left_right_gcp_radius_px, labels_before_fill, disparity_before_fill,
+          &checked, &optimized.labels, &own_disparity);
     }
     int smoothed = 0;
     if (options.optimizer.left_right_median_radius_px > 0) {

@@ -41,6 +41,9 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
 
 // Continuous labels of the GCPs on the reference grid (NaN elsewhere), for propagation.
 cv::Mat SparseGcpLabels(const GcpSet& gcps, const LabelSpace& labels, cv::Size size);
+// Disparities of the GCPs on the reference grid, numerator / depth (NaN elsewhere): the
+// ground-truth convention of rectified data sets (Dataset::disparity_numerator).
+cv::Mat SparseGcpDisparity(const GcpSet& gcps, double numerator, cv::Size size);
 
 // Converts continuous labels (CV_32F or CV_32S) to depth (CV_32F, +inf where invalid).
 cv::Mat LabelMapToDepth(const cv::Mat& labels, const LabelSpace& space);
