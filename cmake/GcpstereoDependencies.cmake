@@ -1,7 +1,9 @@
 # Every dependency comes from a Debian 12 package (see tools/install_deps.sh).
 find_package(Threads REQUIRED)
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
-find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs calib3d)
+# ximgproc (graph-based segmentation for the plane fit) is in libopencv-contrib-dev, which
+# libopencv-dev depends on.
+find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs calib3d ximgproc)
 find_package(yaml-cpp REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(CLI11 REQUIRED)

@@ -1,5 +1,6 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 // Stage 2: ground control points from the configured sources (LiDAR, a depth image, image matches).
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -235,6 +236,26 @@ cv::Mat LabelMapToDisparity(const cv::Mat& labels, const LabelSpace& space, doub
     }
   }
   return disparity;
+}
+
+cv::Mat DisparityMapToLabels(const cv::Mat& disparity, const LabelSpace& space, double numerator) {
+  cv::Mat labels(disparity.size(), CV_32F);
+  const double last = space.count() - 1;
+  for (int r = 0; r < disparity.rows; ++r) {
+    const float* in = disparity.ptr<float>(r);
+    float* out = labels.ptr<float>(r);
+    for (int c = 0; c < disparity.cols; ++c) {
+      double label = std::numeric_limits<double>::quiet_NaN();
+      if (std::isfinite(in[c]) && space.kind() == LabelSpaceKind::kDisparity) {
+        label = space.LabelOfValue(in[c]);
+      } else if (std::isfinite(in[c]) && in[c] > 0) {
+        label = space.LabelOfDepth(numerator / in[c]);
+      }
+      out[c] = std::isnan(label) ? static_cast<float>(label)
+                                 : static_cast<float>(std::clamp(label, 0.0, last));
+    }
+  }
+  return labels;
 }
 
 }  // namespace gcpstereo::pipeline::internal

@@ -262,6 +262,32 @@ void PipelineConfig::Register(config::Schema* s) {
          Range::GreaterThan(0.0),
          {"colour sigma of that median's weights exp(-|I_p - I_q|^2 / sigma^2), intensities in "
           "[0, 1]"});
+  s->Add(
+      "optimizer.plane_fit", &optimizer.plane_fit,
+      {"rectified pairs: after the optimisation, over-segment the reference image by colour, fit "
+       "a disparity plane to each segment robustly, and give the plane's value to the pixels of "
+       "the segment that lie off it (foreground fattening, mismatches in weak texture); with "
+       "the left-right check, consistent pixels support the fit and occluded ones are kept"});
+  s->Add("optimizer.plane_fit_segment_k", &optimizer.plane_fit_options.segmentation_k,
+         Range::GreaterThan(0.0),
+         {"scale k of the graph-based colour segmentation (Felzenszwalb-Huttenlocher): larger k, "
+          "larger segments"});
+  s->Add("optimizer.plane_fit_min_segment_px", &optimizer.plane_fit_options.min_segment_px,
+         Range::Between(1, 100000),
+         {"smallest colour segment; smaller ones are merged into a neighbour", "px"});
+  s->Add("optimizer.plane_fit_inlier_px", &optimizer.plane_fit_options.inlier_px,
+         Range::GreaterThan(0.0),
+         {"a pixel within this disparity distance of its segment's plane lies on it", "px"});
+  s->Add("optimizer.plane_fit_min_inlier_fraction",
+         &optimizer.plane_fit_options.min_inlier_fraction, Range::Between(0.5, 1.0),
+         {"share of a segment's support pixels that must lie on its plane for the plane to be used "
+          "(support: the left-right consistent pixels when the check runs, else all)"});
+  s->Add("optimizer.plane_fit_replace_all", &optimizer.plane_fit_options.replace_all,
+         {"every pixel of a fitted segment takes the plane's value, not only those off it (still "
+          "only nearer ones with plane_fit_only_farther)"});
+  s->Add("optimizer.plane_fit_only_farther", &optimizer.plane_fit_options.only_farther,
+         {"only pixels nearer than their segment's plane (larger disparity) take its value: "
+          "foreground fattened over the segment"});
   s->Add("optimizer.max_cycles", &optimizer.expansion.max_cycles, Range::AtLeast(1),
          {"maximum α-expansion cycles over all labels"});
   s->Add("optimizer.convergence_tolerance", &optimizer.expansion.convergence_tolerance,

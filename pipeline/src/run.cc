@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <future>
 #include <limits>
@@ -34,6 +35,7 @@
 #include "gcpstereo/mesh/meshing.h"
 #include "gcpstereo/mesh/render.h"
 #include "gcpstereo/optimize/left_right.h"
+#include "gcpstereo/optimize/plane_fit.h"
 #include "gcpstereo/optimize/tiling.h"
 #include "gcpstereo/pipeline/output_folder.h"
 #include "gcpstereo/propagation/propagation.h"
@@ -144,6 +146,30 @@ cv::Mat RenderInconsistent(const cv::Mat& image_bgr, const cv::Mat& consistent,
   return picture;
 }
 
+// The plane fit's picture: the grey reference with the colour segments' borders lightened and the
+// pixels that took a plane's value in cyan.
+cv::Mat RenderPlaneFit(const cv::Mat& image_bgr, const cv::Mat& segments, const cv::Mat& before,
+                       const cv::Mat& after) {
+  cv::Mat grey, picture;
+  cv::cvtColor(image_bgr, grey, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(grey, picture, cv::COLOR_GRAY2BGR);
+  const cv::Mat changed = cv::abs(before - after) > 1e-6f;
+  for (int r = 0; r < picture.rows; ++r) {
+    for (int c = 0; c < picture.cols; ++c) {
+      const int s = segments.at<int>(r, c);
+      const bool border = (c + 1 < picture.cols && segments.at<int>(r, c + 1) != s) ||
+                          (r + 1 < picture.rows && segments.at<int>(r + 1, c) != s);
+      cv::Vec3b& pixel = picture.at<cv::Vec3b>(r, c);
+      if (changed.at<std::uint8_t>(r, c)) {
+        pixel = cv::Vec3b(255, 255, 0);
+      } else if (border) {
+        for (int k = 0; k < 3; ++k) pixel[k] = static_cast<std::uint8_t>((pixel[k] + 255) / 2);
+      }
+    }
+  }
+  return picture;
+}
+
 }  // namespace
 
 RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir,
@@ -201,6 +227,11 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
         "optimizer.left_right_check = true needs a rectified pair matched with cost.method = "
         "birchfield_tomasi (here: " +
         cost_method + ")");
+  }
+  if (options.optimizer.plane_fit && !dataset.rectified) {
+    throw ConfigError(
+        "optimizer.plane_fit = true needs a rectified data set (its planes are fitted in "
+        "disparity)");
   }
   if (!options.optimizer.left_right_check && (options.optimizer.left_right_gcp_radius_px > 0 ||
                                               options.optimizer.left_right_median_radius_px > 0)) {
@@ -507,7 +538,10 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   // from the two solves disagree are filled from the background side of their row
   // (optimize/left_right.h). The stage's time is the wait for the second solve plus the fill;
   // partner_seconds is that solve's own wall time (it overlapped the first).
-  cv::Mat inconsistent_preview;
+  cv::Mat inconsistent_preview, plane_fit_preview;
+  // For the plane fit (5c): the pixels that support it (left-right consistent or GCP-confirmed) and
+  // those it must leave alone (occluded in the right view: the background fill is right there).
+  cv::Mat plane_support, plane_frozen;
   if (options.optimizer.left_right_check) {
     StageClock clock(&stages, "left_right_check");
     const optimize::TiledResult partner = partner_result.get();  // rethrows its errors
@@ -520,6 +554,10 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     const cv::Mat consistent = optimize::LeftRightConsistent(
         own_disparity, partner_disparity, options.optimizer.left_right_max_difference_px);
     const int inconsistent = size.area() - cv::countNonZero(consistent);
+    if (options.optimizer.plane_fit) {
+      plane_frozen = optimize::LeftRightOccluded(own_disparity, partner_disparity,
+                                                 options.optimizer.left_right_max_difference_px);
+    }
     // A half-occluded band is at most as wide as the label range in pixels of disparity.
     const auto [min_disparity, max_disparity] =
         std::minmax_element(pair_disparities.begin(), pair_disparities.end());
@@ -544,6 +582,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
           options.optimizer.left_right_median_sigma, &optimized.labels, &own_disparity);
     }
     inconsistent_preview = RenderInconsistent(reference.image, consistent, checked);
+    if (options.optimizer.plane_fit) plane_support = checked;
     spdlog::info("left-right check: {} pixels ({:.2f} %) inconsistent, {} filled, {} kept by GCPs",
                  inconsistent, 100.0 * inconsistent / size.area(), filled, restored);
     clock.Done({{"max_difference_px", options.optimizer.left_right_max_difference_px},
@@ -555,6 +594,27 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                 {"median_changed_pixels", smoothed},
                 {"partner_energy_sum", partner.energy_sum},
                 {"partner_seconds", partner_seconds}});
+  }
+
+  // 5c. Segment planes (optimizer.plane_fit, rectified data): the pixels of a colour segment that
+  // lie nearer than its robustly fitted disparity plane take the plane's value
+  // (optimize/plane_fit.h). With the left-right check, only consistent pixels support the fit and
+  // pixels occluded in the right view keep their background fill.
+  if (options.optimizer.plane_fit) {
+    StageClock clock(&stages, "plane_fit");
+    cv::Mat fitted =
+        internal::LabelMapToDisparity(optimized.labels, labels, dataset.disparity_numerator);
+    const cv::Mat before = fitted.clone();
+    const optimize::PlaneFitSummary summary = optimize::FitSegmentPlanes(
+        reference.image, plane_support, plane_frozen, options.optimizer.plane_fit_options, &fitted);
+    plane_fit_preview = RenderPlaneFit(reference.image, summary.segment_labels, before, fitted);
+    optimized.labels = internal::DisparityMapToLabels(fitted, labels, dataset.disparity_numerator);
+    spdlog::info("plane fit: {} of {} colour segments fitted, {} pixels changed",
+                 summary.fitted_segments, summary.segments, summary.changed_pixels);
+    clock.Done({{"segments", summary.segments},
+                {"fitted_segments", summary.fitted_segments},
+                {"changed_pixels", summary.changed_pixels},
+                {"changed_percent", 100.0 * summary.changed_pixels / size.area()}});
   }
 
   // 6. Depth (and disparity) maps.
@@ -657,6 +717,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
       add("ground_truth.png", DepthPreview(dataset.ground_truth.depth, lo, hi));
     }
     if (!inconsistent_preview.empty()) add("left_right_check.png", inconsistent_preview);
+    if (!plane_fit_preview.empty()) add("plane_fit.png", plane_fit_preview);
     for (const auto& [name, image] : mesh_previews) add(name, image);
     for (const auto& [name, image] : previews) add(name, image);
   }

@@ -50,6 +50,9 @@ cv::Mat LabelMapToDepth(const cv::Mat& labels, const LabelSpace& space);
 // Disparity in the data set's ground-truth convention: the label value itself for disparity
 // labels, numerator / depth otherwise (+inf where unknown).
 cv::Mat LabelMapToDisparity(const cv::Mat& labels, const LabelSpace& space, double numerator);
+// The inverse: continuous labels (CV_32F, clamped to the label range; NaN where the disparity is
+// not finite or, for depth labels, not positive).
+cv::Mat DisparityMapToLabels(const cv::Mat& disparity, const LabelSpace& space, double numerator);
 
 // Evaluation against whatever ground truth the data set carries. `maps` are named depth maps
 // ("final", "propagated", …); figures are added to `previews` (name → image).

@@ -59,6 +59,22 @@ TEST(LeftRightCheck, FatteningIsDetectedAndFilledFromTheBackground) {
   EXPECT_EQ(cv::norm(values, TrueLeft() * 10.0f, cv::NORM_INF), 0.0);
 }
 
+TEST(LeftRightCheck, OccludedPixelsAreToldFromMismatches) {
+  // The true band 17–19 is hidden from the right camera by the foreground: occluded.
+  cv::Mat left = TrueLeft();
+  left.at<float>(0, 45) = 8.0f;  // a mismatch: the right map at its match is background
+  const cv::Mat occluded = LeftRightOccluded(left, TrueRight(), 0.5);
+  for (int r = 0; r < kRows; ++r) {
+    for (int c = 0; c < kCols; ++c) {
+      EXPECT_EQ(occluded.at<std::uint8_t>(r, c), c >= 17 && c < 20 ? 255 : 0) << r << "," << c;
+    }
+  }
+  // Fattening over the band: the foreground value matches background in the right view, so
+  // those pixels are mismatches, not occlusions.
+  left.colRange(16, 20).setTo(kFore);
+  EXPECT_EQ(cv::countNonZero(LeftRightOccluded(left, TrueRight(), 1.0)), 0);
+}
+
 TEST(LeftRightCheck, ToleranceAndUnknownValues) {
   cv::Mat right = TrueRight();
   right += 0.75f;  // every right value off by 0.75 px

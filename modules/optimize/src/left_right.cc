@@ -45,6 +45,26 @@ cv::Mat LeftRightConsistent(const cv::Mat& left_disparity, const cv::Mat& right_
   return consistent;
 }
 
+cv::Mat LeftRightOccluded(const cv::Mat& left_disparity, const cv::Mat& right_disparity,
+                          double max_difference_px) {
+  const cv::Mat consistent =
+      LeftRightConsistent(left_disparity, right_disparity, max_difference_px);  // checks inputs
+  cv::Mat occluded(left_disparity.size(), CV_8U, cv::Scalar(0));
+  for (int r = 0; r < left_disparity.rows; ++r) {
+    const float* left = left_disparity.ptr<float>(r);
+    const float* right = right_disparity.ptr<float>(r);
+    const std::uint8_t* ok = consistent.ptr<std::uint8_t>(r);
+    std::uint8_t* out = occluded.ptr<std::uint8_t>(r);
+    for (int c = 0; c < left_disparity.cols; ++c) {
+      if (ok[c] || !std::isfinite(left[c])) continue;
+      const long match = std::lround(c - static_cast<double>(left[c]));
+      // Inconsistent pixels always match inside the right image (LeftRightConsistent).
+      if (std::isfinite(right[match]) && right[match] > left[c] + max_difference_px) out[c] = 255;
+    }
+  }
+  return occluded;
+}
+
 int FillFromBackground(const cv::Mat& consistent, int max_run_px, cv::Mat* values,
                        cv::Mat* disparity) {
   Require(values != nullptr && disparity != nullptr, "FillFromBackground: null output");

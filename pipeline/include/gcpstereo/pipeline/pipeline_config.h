@@ -16,6 +16,7 @@
 #include "gcpstereo/mesh/render.h"
 #include "gcpstereo/optimize/alpha_expansion.h"
 #include "gcpstereo/optimize/energy.h"
+#include "gcpstereo/optimize/plane_fit.h"
 #include "gcpstereo/optimize/refinement.h"
 #include "gcpstereo/propagation/propagation.h"
 
@@ -92,6 +93,12 @@ struct OptimizerOptions {
   // window half-size (0 = off) and colour sigma (intensities in [0, 1]).
   int left_right_median_radius_px = 0;
   double left_right_median_sigma = 0.1;
+  // optimizer.plane_fit: rectified data only. After the optimisation (and the left-right check),
+  // the reference image is over-segmented by colour and the pixels of a segment that lie nearer
+  // than the segment's robustly fitted disparity plane take the plane's value
+  // (optimize/plane_fit.h).
+  bool plane_fit = false;
+  optimize::PlaneFitOptions plane_fit_options;
 };
 
 // Keys of the `optimizer:` section that the pipeline itself reads.

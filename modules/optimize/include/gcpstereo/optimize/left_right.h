@@ -27,6 +27,14 @@ namespace gcpstereo::optimize {
 cv::Mat LeftRightConsistent(const cv::Mat& left_disparity, const cv::Mat& right_disparity,
                             double max_difference_px);
 
+// The inconsistent pixels that are occluded in the right view rather than mismatched (Hirschmüller's
+// distinction in semi-global matching): CV_8U, 255 where the left pixel fails the check above and
+// the right map at its match x − d is nearer (larger disparity, by more than `max_difference_px`):
+// something in front hides the point from the right camera. 0 elsewhere, including mismatches
+// (the right map there is farther) and pixels that cannot be checked.
+cv::Mat LeftRightOccluded(const cv::Mat& left_disparity, const cv::Mat& right_disparity,
+                          double max_difference_px);
+
 // Fills the pixels where `consistent` is 0, run by run along each row: the nearest consistent
 // pixels left and right of a run are found and the one with the smaller disparity (the background)
 // gives its value of `values` (any CV_32F map, e.g. labels) and of `disparity` to the whole run; at
