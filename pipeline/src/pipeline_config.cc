@@ -196,6 +196,15 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("propagation.median_sigma_colour", &propagation.median_sigma_colour,
          Range::GreaterThan(0.0),
          {"weighted_median: colour bandwidth of the weights exp(-|ΔRGB|^2/(2 sigma^2))", "RGB"});
+  s->Add("propagation.median_colour_floor", &propagation.median_colour_floor, Range::Between(0, 1),
+         {"weighted_median: share of its spatial weight a GCP keeps however different its colour, "
+          "w = w_s (floor + (1 - floor) w_c); 0 = the colour weight alone, 1 = spatial weights "
+          "only"});
+  s->Add("propagation.median_edge_stretch", &propagation.median_edge_stretch,
+         Range::Between(1, 100),
+         {"weighted_median: the distance across the local depth edge (the gradient of the "
+          "least-squares plane through the window's GCPs) counts this many times in the squared "
+          "distance of the spatial weight; 1 = isotropic"});
   s->Add("propagation.gamma", &propagation.gamma, Range::GreaterThan(0.0),
          {"colour bandwidth of the affinities w = exp(−|ΔRGB|/γ) (paper: 1.25; measured best: 4)",
           "RGB", "γ"});

@@ -2,6 +2,7 @@
 // D̂ as a weighted median of the GCPs (propagation.method: weighted_median).
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -91,6 +92,60 @@ TEST(WeightedMedianPropagation, ColourWeightsKeepTheSideOfTheColourEdge) {
   }
 }
 
+// A scan's depth edge a few pixels off the image's: the pixel (4, 4) has the colour of the one GCP
+// of value 2 four rows above it, while the five GCPs of value 7 one or two pixels away sit on
+// bright pixels. With the colour weight alone (floor 0) the single similar GCP decides; with a
+// floor of 0.25 the nearer majority wins, as it does with spatial weights only (floor 1).
+TEST(WeightedMedianPropagation, ColourFloorLetsTheNearerMajorityWin) {
+  cv::Mat image(9, 9, CV_8UC3, cv::Scalar(40, 40, 40));
+  cv::Mat sparse(9, 9, CV_32F, cv::Scalar(kNaN));
+  sparse.at<float>(0, 4) = 2.0f;
+  for (const cv::Point p :
+       {cv::Point(3, 5), cv::Point(4, 5), cv::Point(5, 5), cv::Point(3, 6), cv::Point(5, 6)}) {
+    sparse.at<float>(p) = 7.0f;
+    image.at<cv::Vec3b>(p) = cv::Vec3b(200, 200, 200);
+  }
+  PropagationOptions options = Median(4, 3.0, 20.0);
+  EXPECT_EQ(Propagate(image, sparse, options).values.at<float>(4, 4), 2.0f);
+  options.median_colour_floor = 0.25;
+  EXPECT_EQ(Propagate(image, sparse, options).values.at<float>(4, 4), 7.0f);
+  options.median_colour_floor = 1.0;
+  const cv::Mat spatial_only = Propagate(image, sparse, options).values;
+  EXPECT_EQ(spatial_only.at<float>(4, 4), 7.0f);
+  // Floor 1 ignores the colours: the same map as an all-grey image.
+  const cv::Mat grey(9, 9, CV_8UC3, cv::Scalar(40, 40, 40));
+  const cv::Mat no_colour = Propagate(grey, sparse, options).values;
+  const cv::Mat both_known = (spatial_only == spatial_only) & (no_colour == no_colour);
+  EXPECT_EQ(cv::countNonZero((spatial_only != no_colour) & both_known), 0);
+  EXPECT_EQ(cv::countNonZero(both_known), 81);
+}
+
+// A pole (value 9, columns 0..4) against a background (value 2), no colour edge: two scan lines
+// four rows above and below the pixel (6, 4) cross the edge, and the pixel's own line has
+// background GCPs 2..4 px to its right and one pole GCP 3 px to its left. Isotropic weights let
+// the nearer background win; with the distance across the edge counted 4 times the pixel follows
+// the pole's column above and below it. The same layout transposed (a horizontal edge) gives the
+// same value at the transposed pixel: the direction comes from the GCPs, not from the axes.
+TEST(WeightedMedianPropagation, EdgeStretchFollowsTheGcpsAlongTheEdge) {
+  constexpr int kSize = 13;
+  const cv::Mat image(kSize, kSize, CV_8UC3, cv::Scalar(90, 90, 90));
+  cv::Mat sparse(kSize, kSize, CV_32F, cv::Scalar(kNaN));
+  for (int c = 0; c < kSize; ++c) {
+    sparse.at<float>(2, c) = sparse.at<float>(10, c) = c <= 4 ? 9.0f : 2.0f;
+  }
+  for (int c : {6, 7, 8}) sparse.at<float>(6, c) = 2.0f;
+  sparse.at<float>(6, 1) = 9.0f;
+  PropagationOptions options = Median(6, 3.0, 20.0);
+  EXPECT_EQ(Propagate(image, sparse, options).values.at<float>(6, 4), 2.0f);
+  options.median_edge_stretch = 4.0;
+  const cv::Mat stretched = Propagate(image, sparse, options).values;
+  EXPECT_EQ(stretched.at<float>(6, 4), 9.0f);
+  EXPECT_EQ(stretched.at<float>(6, 5), 2.0f);  // a background pixel stays background
+  const cv::Mat transposed = Propagate(image, sparse.t(), options).values;
+  EXPECT_EQ(transposed.at<float>(4, 6), 9.0f);
+  EXPECT_EQ(cv::norm(transposed.t(), stretched, cv::NORM_INF), 0.0);
+}
+
 // A ramp 0.5·column sampled every 2 px: away from the borders, where the window is symmetric, the
 // median is the value at the pixel or one of the two GCP columns around it (error <= 0.5).
 TEST(WeightedMedianPropagation, RampIsKeptWithinHalfAGcpStep) {
@@ -143,6 +198,19 @@ TEST(WeightedMedianPropagation, OptionsCheckNamesTheKey) {
   EXPECT_THROW(Median(101, 2.0, 20.0).Check(), ConfigError);
   EXPECT_THROW(Median(4, 0.0, 20.0).Check(), ConfigError);
   EXPECT_THROW(Median(4, 2.0, -1.0).Check(), ConfigError);
+  PropagationOptions bad_stretch = Median(4, 2.0, 20.0);
+  bad_stretch.median_edge_stretch = 0.5;
+  EXPECT_THROW(bad_stretch.Check(), ConfigError);
+  for (const double floor : {-0.1, 1.5}) {
+    PropagationOptions bad_floor = Median(4, 2.0, 20.0);
+    bad_floor.median_colour_floor = floor;
+    try {
+      bad_floor.Check();
+      FAIL() << "expected ConfigError for floor " << floor;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("propagation.median_colour_floor"), std::string::npos);
+    }
+  }
   const cv::Mat grey(10, 10, CV_8U, cv::Scalar(0));
   EXPECT_THROW(Propagate(grey, cv::Mat(10, 10, CV_32F, cv::Scalar(kNaN)), Median(4, 2.0, 20.0)),
                Error);

@@ -164,6 +164,14 @@ void PropagationOptions::Check() const {
     throw ConfigError(ViolatedConstraint("propagation.median_sigma_colour",
                                          FormatNumber(median_sigma_colour), "sigma > 0"));
   }
+  if (!(median_colour_floor >= 0.0 && median_colour_floor <= 1.0)) {
+    throw ConfigError(ViolatedConstraint("propagation.median_colour_floor",
+                                         FormatNumber(median_colour_floor), "0 <= floor <= 1"));
+  }
+  if (!(median_edge_stretch >= 1.0 && median_edge_stretch <= 100.0)) {
+    throw ConfigError(ViolatedConstraint("propagation.median_edge_stretch",
+                                         FormatNumber(median_edge_stretch), "1 <= stretch <= 100"));
+  }
   if (!(gamma > 0.0) || !std::isfinite(gamma)) {
     throw ConfigError(ViolatedConstraint("propagation.gamma", FormatNumber(gamma), "gamma > 0"));
   }

@@ -20,7 +20,48 @@ namespace {
 struct Sample {
   float value;
   double weight;
+  int dx, dy;     // offset from the pixel
+  double colour;  // the colour factor of the weight
 };
+
+// Edge-aligned spatial weights (median_edge_stretch k > 1): the weighted least-squares plane
+// v = a + b·dx + c·dy through the samples (isotropic spatial weights) gives the direction n of the
+// steepest change, across the local depth edge or slope; the distance across it counts k times in
+// the squared distance, so the GCPs along the edge (the same side) weigh more than those across
+// it. Leaves the weights isotropic when the samples are collinear or the plane is flat.
+void StretchAlongEdges(std::vector<Sample>* samples, const std::vector<double>& spatial, int radius,
+                       double stretch, double inv_2ss) {
+  double sw = 0.0, sx = 0.0, sy = 0.0, sv = 0.0;
+  for (const Sample& s : *samples) {
+    const double w = spatial[(s.dy + radius) * (2 * radius + 1) + s.dx + radius];
+    sw += w;
+    sx += w * s.dx;
+    sy += w * s.dy;
+    sv += w * s.value;
+  }
+  if (samples->size() < 3 || !(sw > 0.0)) return;
+  const double mx = sx / sw, my = sy / sw, mv = sv / sw;
+  double cxx = 0.0, cxy = 0.0, cyy = 0.0, cxv = 0.0, cyv = 0.0;
+  for (const Sample& s : *samples) {
+    const double w = spatial[(s.dy + radius) * (2 * radius + 1) + s.dx + radius];
+    const double x = s.dx - mx, y = s.dy - my, v = s.value - mv;
+    cxx += w * x * x;
+    cxy += w * x * y;
+    cyy += w * y * y;
+    cxv += w * x * v;
+    cyv += w * y * v;
+  }
+  const double trace = cxx + cyy, det = cxx * cyy - cxy * cxy;
+  if (!(trace > 0.0) || !(det > 1e-9 * trace * trace)) return;
+  const double b = (cyy * cxv - cxy * cyv) / det, c = (cxx * cyv - cxy * cxv) / det;
+  const double g = std::hypot(b, c);
+  if (!(g > 0.0) || !std::isfinite(g)) return;
+  const double nx = b / g, ny = c / g;
+  for (Sample& s : *samples) {
+    const double across = s.dx * nx + s.dy * ny, along = s.dy * nx - s.dx * ny;
+    s.weight = std::exp(-(along * along + stretch * across * across) * inv_2ss) * s.colour;
+  }
+}
 
 }  // namespace
 
@@ -32,6 +73,8 @@ PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::
   const int radius = options.median_radius_px;
   const double inv_2ss = 1.0 / (2.0 * options.median_sigma_px * options.median_sigma_px);
   const double inv_2sc = 1.0 / (2.0 * options.median_sigma_colour * options.median_sigma_colour);
+  const double floor = options.median_colour_floor;
+  const double stretch = options.median_edge_stretch;
 
   PropagationResult result;
   result.solver = "weighted median";
@@ -67,7 +110,6 @@ PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::
         }
         samples.clear();
         const cv::Vec3b& colour = image_row[c];
-        double total = 0.0;
         for (int y = std::max(0, r - radius); y <= std::min(height - 1, r + radius); ++y) {
           const float* values = sparse_values.ptr<float>(y);
           const cv::Vec3b* pixels = image_bgr.ptr<cv::Vec3b>(y);
@@ -79,13 +121,17 @@ PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::
               const double d = static_cast<double>(pixels[x][k]) - colour[k];
               colour_distance2 += d * d;
             }
-            const double w = spatial[spatial_row + x - c] * std::exp(-colour_distance2 * inv_2sc);
-            samples.push_back({values[x], w});
-            total += w;
+            const double colour_factor =
+                floor + (1.0 - floor) * std::exp(-colour_distance2 * inv_2sc);
+            samples.push_back({values[x], spatial[spatial_row + x - c] * colour_factor, x - c,
+                               y - r, colour_factor});
           }
         }
         if (samples.empty()) continue;
         reached[c] = 255;
+        if (stretch > 1.0) StretchAlongEdges(&samples, spatial, radius, stretch, inv_2ss);
+        double total = 0.0;
+        for (const Sample& s : samples) total += s.weight;
         if (!(total > 0.0)) {  // every weight underflowed: fall back to equal weights
           for (Sample& s : samples) s.weight = 1.0;
           total = static_cast<double>(samples.size());

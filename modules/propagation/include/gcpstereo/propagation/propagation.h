@@ -26,6 +26,20 @@ struct PropagationOptions {
   int median_radius_px = 10;
   double median_sigma_px = 4.0;
   double median_sigma_colour = 20.0;
+  // weighted_median: the share of its spatial weight a GCP keeps however different its colour,
+  // w = exp(−d² / (2 σs²)) · (φ + (1 − φ) · exp(−‖I_p − I_q‖² / (2 σc²))). With φ = 0 (the
+  // default, the weights above) one GCP of similar colour outweighs many nearer ones of another
+  // colour; where a scan's depth edges lie a few pixels off the image's (KITTI: poles, roof
+  // edges), the colour then picks the wrong side. φ = 1: spatial weights only. Valid: [0, 1].
+  // Key propagation.median_colour_floor.
+  double median_colour_floor = 0.0;
+  // weighted_median: k ≥ 1, how many times the distance across the local depth edge counts in the
+  // squared distance of the spatial weight: d² = along² + k·across², the direction from the
+  // weighted least-squares plane through the window's GCPs (see PropagateByWeightedMedian). A
+  // pixel then follows the GCPs along the edge — a pole's column above and below it, a roof's
+  // scan line beside it — rather than the nearest GCP across it. 1 (the default): isotropic.
+  // Valid: [1, 100]. Key propagation.median_edge_stretch.
+  double median_edge_stretch = 1.0;
   // γ of eq. 5 (the colour bandwidth of w_pq = max(exp(−‖I_p − I_q‖₂ / γ), ε)), in RGB grey levels
   // (0…255 per channel). Paper: 1.25 (its colour unit is not stated); in 8-bit units that makes
   // the affinities nearly binary. Default 4, measured (tools/benchmark.py --suite table2, D̂ from
@@ -99,7 +113,11 @@ PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_valu
 // D̂ as a joint-bilateral weighted median of the GCPs (options.method "weighted_median"): pixel p
 // takes the value v of a GCP q within the (2r+1)² window (r = median_radius_px) at which the
 // cumulative weight of the window's GCPs, sorted by value, first reaches half of their total,
-// w_q = exp(−‖p − q‖² / (2 σs²) − ‖I_p − I_q‖² / (2 σc²)); ties in value keep the raster order.
+// w_q = exp(−‖p − q‖² / (2 σs²)) · (φ + (1 − φ) · exp(−‖I_p − I_q‖² / (2 σc²))), φ =
+// median_colour_floor; ties in value keep the raster order. With median_edge_stretch k > 1 the
+// spatial factor becomes exp(−(a² + k·n²) / (2 σs²)), n and a the offset's components across and
+// along the gradient of the least-squares plane through the window's GCPs weighted by the
+// isotropic spatial factor (isotropic when those GCPs are collinear or their plane is flat).
 // GCP pixels hold their own value. Pixels with no GCP in their window are NaN and counted as
 // unreached (regions: 8-connected). Same inputs, outputs and errors as Propagate; `solver` is
 // "weighted median", `num_unknowns` the number of pixels computed, residual 0.
