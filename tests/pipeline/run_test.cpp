@@ -219,10 +219,11 @@ TEST(MiddleburyRun, PlaneFitRemovesFattening) {
   EXPECT_FALSE(without["stages"].contains("plane_fit"));
 }
 
-// KITTI frame 10 at half size (5 s a run): the weighted-median D̂ and the GCP-confirmed fill of
-// kitti_lidar.yaml against the paper's linear-system D̂ without it. Measured: held-out bad-3
-// 2.08 % against 3.67 % (and 2.49 % against 5.45 % at full size).
-TEST(KittiRun, MedianPriorAndGcpConfirmedFillFollowTheScan) {
+// KITTI frame 10 at half size (5 s a run): the weighted-median D̂ of kitti_lidar.yaml against the
+// paper's linear-system D̂, and its colour floor and edge stretch against plain joint-bilateral
+// weights (σs 4, σc 20). Measured held-out bad-3: 1.59 % against 3.70 % (linear system) and
+// 2.11 % (plain weights); D̂ alone 1.34 / 3.44 / 1.89 % (full size: see the config).
+TEST(KittiRun, MedianPriorFollowsTheScan) {
   GCPSTEREO_REQUIRE_SHARED_DATA(drive, "kitti/2011_09_26/2011_09_26_drive_0009_sync");
   const std::string dir = testing::MakeTempDir("gcpstereo-kitti");
   auto run = [&](const std::string& name, std::vector<std::string> extra) {
@@ -242,16 +243,19 @@ TEST(KittiRun, MedianPriorAndGcpConfirmedFillFollowTheScan) {
     return nlohmann::json::parse(RunPipeline(config, dir + "/" + name, "(test)").report_json);
   };
   const nlohmann::json shipped = run("shipped", {});
-  const nlohmann::json paper =
-      run("linear", {"propagation.method=linear_system", "optimizer.left_right_gcp_radius_px=0"});
+  const nlohmann::json paper = run("linear", {"propagation.method=linear_system"});
+  const nlohmann::json plain =
+      run("plain", {"propagation.median_colour_floor=0", "propagation.median_edge_stretch=1",
+                    "propagation.median_sigma_px=4", "propagation.median_sigma_colour=20"});
   auto bad3 = [](const nlohmann::json& report, const char* map) {
     return report["metrics"]["lidar_holdout"][map]["bad3_percent"].get<double>();
   };
   EXPECT_LT(bad3(shipped, "result"), bad3(paper, "result") - 1.0);
   EXPECT_LT(bad3(shipped, "propagated"), bad3(paper, "propagated") - 1.0);
+  EXPECT_LT(bad3(shipped, "result"), bad3(plain, "result") - 0.3);
+  EXPECT_LT(bad3(shipped, "propagated"), bad3(plain, "propagated") - 0.3);
   EXPECT_EQ(shipped["stages"]["propagation"]["solver"], "weighted median");
-  EXPECT_GT(shipped["stages"]["left_right_check"]["gcp_restored_pixels"].get<int>(), 0);
-  EXPECT_EQ(paper["stages"]["left_right_check"]["gcp_restored_pixels"].get<int>(), 0);
+  EXPECT_FALSE(shipped["stages"].contains("left_right_check"));
 }
 
 }  // namespace
