@@ -247,6 +247,9 @@ void PipelineConfig::Register(config::Schema* s) {
          {"include E_gcp (false = the paper's baseline D, even with GCPs configured)"});
   s->Add("optimizer.prior_radius_px", &optimizer.prior_radius_px, Range::AtLeast(0.0),
          {"E_gcp only within this distance of a GCP (0 = everywhere, the paper)", "px"});
+  s->Add("optimizer.prior_segment_k", &optimizer.prior_segment_k, Range::AtLeast(0.0),
+         {"E_gcp only in the colour segments that hold a GCP (graph-based segmentation of the "
+          "reference with this scale k; larger k, larger segments); 0 = everywhere (the paper)"});
   s->Add("optimizer.left_right_check", &optimizer.left_right_check,
          {"rectified pairs: solve again with the neighbour as reference and fill the pixels whose "
           "disparities disagree from the background side of their row (doubles the optimisation "

@@ -89,6 +89,29 @@ optimize::ExpansionOptions ExpansionOptionsOf(const PipelineConfig& options) {
 }
 
 // D̂ restricted to within `radius_px` of a GCP pixel (NaN farther away); radius 0 = unchanged.
+// D̂ restricted, given a segmentation, to the colour segments that hold a GCP (NaN in the others):
+// there D̂ interpolates GCPs of the same surface; elsewhere it is extrapolated across a colour edge
+// (Midd1's textureless lamp-shade opening next to GCPs on its rim). No segmentation: unchanged.
+cv::Mat PriorInGcpSegments(const cv::Mat& prior, const std::vector<cv::Point>& gcp_pixels,
+                           const cv::Mat& image_bgr,
+                           const optimize::PlaneFitOptions* segmentation) {
+  if (prior.empty() || segmentation == nullptr) return prior;
+  const cv::Mat segments = optimize::SegmentImage(image_bgr, *segmentation);
+  double max_label = 0.0;
+  cv::minMaxLoc(segments, nullptr, &max_label);
+  std::vector<std::uint8_t> has_gcp(static_cast<size_t>(max_label) + 1, 0);
+  for (const cv::Point& p : gcp_pixels) has_gcp[segments.at<int>(p)] = 1;
+  cv::Mat masked = prior.clone();
+  for (int r = 0; r < masked.rows; ++r) {
+    for (int c = 0; c < masked.cols; ++c) {
+      if (!has_gcp[segments.at<int>(r, c)]) {
+        masked.at<float>(r, c) = std::numeric_limits<float>::quiet_NaN();
+      }
+    }
+  }
+  return masked;
+}
+
 cv::Mat PriorNearGcps(const cv::Mat& prior, const std::vector<cv::Point>& gcp_pixels,
                       double radius_px) {
   if (prior.empty() || radius_px <= 0.0) return prior;
@@ -378,12 +401,20 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   // The prior of the GCP energy: D̂, optionally only within optimizer.prior_radius_px of a GCP.
   std::vector<cv::Point> gcp_pixels;
   for (const Gcp& g : gcps.points) gcp_pixels.emplace_back(g.col, g.row);
-  const cv::Mat energy_prior = PriorNearGcps(prior, gcp_pixels, options.optimizer.prior_radius_px);
+  // … and optionally only in the colour segments that hold a GCP (optimizer.prior_segment_k).
+  optimize::PlaneFitOptions prior_segmentation = options.optimizer.plane_fit_options;
+  prior_segmentation.segmentation_k = options.optimizer.prior_segment_k;
+  const optimize::PlaneFitOptions* segmentation =
+      options.optimizer.prior_segment_k > 0.0 ? &prior_segmentation : nullptr;
+  const cv::Mat energy_prior =
+      PriorNearGcps(PriorInGcpSegments(prior, gcp_pixels, reference.image, segmentation),
+                    gcp_pixels, options.optimizer.prior_radius_px);
   const double prior_percent =
       prior.empty() ? 0.0 : 100.0 * cv::countNonZero(energy_prior == energy_prior) / size.area();
-  if (!prior.empty() && options.optimizer.prior_radius_px > 0.0) {
-    spdlog::info("GCP energy on {:.1f} % of the pixels (within {} px of a GCP)", prior_percent,
-                 options.optimizer.prior_radius_px);
+  if (!prior.empty() && (options.optimizer.prior_radius_px > 0.0 || segmentation != nullptr)) {
+    spdlog::info("GCP energy on {:.1f} % of the pixels (within {} px of a GCP{})", prior_percent,
+                 options.optimizer.prior_radius_px,
+                 segmentation != nullptr ? ", in colour segments holding one" : "");
   }
 
   // 4–5. Matching costs and global optimisation, tile by tile (memory follows the tile).
@@ -491,7 +522,9 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
             MirroredPartnerGcpLabels(gcps, labels, reference.camera, pair_neighbor->camera,
                                      options.gcp.lidar, &mirrored_gcp_pixels);
         mirrored_prior = PriorNearGcps(
-            propagation::Propagate(mirrored_reference, sparse, options.propagation).values,
+            PriorInGcpSegments(
+                propagation::Propagate(mirrored_reference, sparse, options.propagation).values,
+                mirrored_gcp_pixels, mirrored_reference, segmentation),
             mirrored_gcp_pixels, options.optimizer.prior_radius_px);
       }
       optimize::TiledResult result = optimize_view(make_mirrored_problem, "");

@@ -146,6 +146,21 @@ TEST_F(TinyScene, PriorRadiusLimitsTheGcpEnergyToPixelsNearGcps) {
   EXPECT_LE(some, 100.0 * 9 / 64 + 0.5);
 }
 
+// optimizer.prior_segment_k keeps E_gcp in the colour segments that hold a GCP: with one segment
+// (huge k) that is every pixel; with the finest segmentation (k 1, segments of ≥ 20 px against
+// one GCP per 64 px) many segments hold none.
+TEST_F(TinyScene, PriorSegmentsLimitTheGcpEnergyToSegmentsWithGcps) {
+  const nlohmann::json whole = Run({"optimizer.prior_segment_k=1e9"}, "segments_whole");
+  const nlohmann::json fine = Run({"optimizer.prior_segment_k=1"}, "segments_fine");
+  const double all = whole["stages"]["cost_and_optimization"]["gcp_energy_pixels_percent"];
+  const double some = fine["stages"]["cost_and_optimization"]["gcp_energy_pixels_percent"];
+  std::cout << "[ measured ] GCP energy on " << all << " % (one segment) and " << some
+            << " % (k 1) of the pixels\n";
+  EXPECT_GT(all, 99.0);
+  EXPECT_LT(some, all - 10.0);
+  EXPECT_GT(some, 10.0);
+}
+
 TEST_F(TinyScene, BadReferenceNameFailsWithoutOutputs) {
   ExpectRunFails<Error>("dataset.reference=0099", "bad");
 }
@@ -160,21 +175,24 @@ TEST_F(TinyScene, PlaneFitNeedsRectifiedData) {
   ExpectRunFails<ConfigError>("optimizer.plane_fit=true", "planes");
 }
 
-// configs/middlebury_stereo.yaml on tsukuba's ground-truth pair with `overrides`, into `out`.
+// The shipped configs/<config_name> with `overrides` (after `base`), run into `out`.
+nlohmann::json RunShippedConfig(const std::string& config_name, const std::string& out,
+                                std::vector<std::string> base,
+                                const std::vector<std::string>& overrides) {
+  base.push_back("runtime.log_level=warn");
+  base.insert(base.end(), overrides.begin(), overrides.end());
+  LoadedConfig config;
+  config.Load((fs::path(GCPSTEREO_SOURCE_DIR) / "configs" / config_name).string(), base);
+  return nlohmann::json::parse(RunPipeline(config, out, "(test)").report_json);
+}
+// configs/middlebury_stereo.yaml on tsukuba's ground-truth pair.
 nlohmann::json RunTsukuba(const std::string& tsukuba, const std::string& out,
                           const std::vector<std::string>& overrides) {
-  std::vector<std::string> all = {"dataset.path=" + tsukuba,
-                                  "dataset.reference=scene1.row3.col3",
-                                  "dataset.neighbors=[scene1.row3.col4]",
-                                  "labels.min=0",
-                                  "labels.max=15",
-                                  "labels.count=16",
-                                  "runtime.log_level=warn"};
-  all.insert(all.end(), overrides.begin(), overrides.end());
-  LoadedConfig config;
-  config.Load((fs::path(GCPSTEREO_SOURCE_DIR) / "configs" / "middlebury_stereo.yaml").string(),
-              all);
-  return nlohmann::json::parse(RunPipeline(config, out, "(test)").report_json);
+  return RunShippedConfig(
+      "middlebury_stereo.yaml", out,
+      {"dataset.path=" + tsukuba, "dataset.reference=scene1.row3.col3",
+       "dataset.neighbors=[scene1.row3.col4]", "labels.min=0", "labels.max=15", "labels.count=16"},
+      overrides);
 }
 double Bad1(const nlohmann::json& report, const char* mask) {
   return report["metrics"]["middlebury"]["result"][mask]["bad_percent"][1].get<double>();
@@ -226,21 +244,13 @@ TEST(MiddleburyRun, PlaneFitRemovesFattening) {
 TEST(KittiRun, MedianPriorFollowsTheScan) {
   GCPSTEREO_REQUIRE_SHARED_DATA(drive, "kitti/2011_09_26/2011_09_26_drive_0009_sync");
   const std::string dir = testing::MakeTempDir("gcpstereo-kitti");
-  auto run = [&](const std::string& name, std::vector<std::string> extra) {
-    std::vector<std::string> overrides = {
-        "dataset.path=" + drive,
-        "dataset.reference=0000000010",
-        "gcp.lidar.path=" + drive + "/velodyne_points/data/0000000010.bin",
-        "eval.lidar_holdout=true",
-        "dataset.scale=0.5",
-        "labels.max=63",
-        "labels.count=64",
-        "runtime.log_level=warn"};
-    overrides.insert(overrides.end(), extra.begin(), extra.end());
-    LoadedConfig config;
-    config.Load((fs::path(GCPSTEREO_SOURCE_DIR) / "configs" / "kitti_lidar.yaml").string(),
-                overrides);
-    return nlohmann::json::parse(RunPipeline(config, dir + "/" + name, "(test)").report_json);
+  auto run = [&](const std::string& name, const std::vector<std::string>& extra) {
+    return RunShippedConfig(
+        "kitti_lidar.yaml", dir + "/" + name,
+        {"dataset.path=" + drive, "dataset.reference=0000000010",
+         "gcp.lidar.path=" + drive + "/velodyne_points/data/0000000010.bin",
+         "eval.lidar_holdout=true", "dataset.scale=0.5", "labels.max=63", "labels.count=64"},
+        extra);
   };
   const nlohmann::json shipped = run("shipped", {});
   const nlohmann::json paper = run("linear", {"propagation.method=linear_system"});

@@ -80,6 +80,10 @@ struct OptimizerOptions {
   // processing resolution); elsewhere D̂ is an extrapolation over textureless areas and the data
   // and smoothness terms decide. 0 = everywhere (the paper). Range >= 0.
   double prior_radius_px = 0.0;
+  // optimizer.prior_segment_k: E_gcp only in the colour segments (graph-based segmentation of the
+  // reference with this scale k, as the plane fit's) that hold a GCP; in the others D̂ is an
+  // extrapolation across a colour edge. 0 = off (the paper). Range >= 0.
+  double prior_segment_k = 0.0;
   // optimizer.left_right_check: rectified pairs only (Birchfield–Tomasi cost). Solves the pair a
   // second time with the neighbour as reference and replaces the reference pixels whose two
   // disparities differ by more than left_right_max_difference_px by the background side of their
