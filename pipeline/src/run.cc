@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <filesystem>
 #include <future>
 #include <limits>
@@ -88,7 +87,6 @@ optimize::ExpansionOptions ExpansionOptionsOf(const PipelineConfig& options) {
   return expansion;
 }
 
-// D̂ restricted to within `radius_px` of a GCP pixel (NaN farther away); radius 0 = unchanged.
 // D̂ restricted, given a segmentation, to the colour segments that hold a GCP (NaN in the others):
 // there D̂ interpolates GCPs of the same surface; elsewhere it is extrapolated across a colour edge
 // (Midd1's textureless lamp-shade opening next to GCPs on its rim). No segmentation: unchanged.
@@ -112,6 +110,7 @@ cv::Mat PriorInGcpSegments(const cv::Mat& prior, const std::vector<cv::Point>& g
   return masked;
 }
 
+// D̂ restricted to within `radius_px` of a GCP pixel (NaN farther away); radius 0 = unchanged.
 cv::Mat PriorNearGcps(const cv::Mat& prior, const std::vector<cv::Point>& gcp_pixels,
                       double radius_px) {
   if (prior.empty() || radius_px <= 0.0) return prior;
@@ -641,7 +640,9 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     const optimize::PlaneFitSummary summary = optimize::FitSegmentPlanes(
         reference.image, plane_support, plane_frozen, options.optimizer.plane_fit_options, &fitted);
     plane_fit_preview = RenderPlaneFit(reference.image, summary.segment_labels, before, fitted);
-    optimized.labels = internal::DisparityMapToLabels(fitted, labels, dataset.disparity_numerator);
+    // Only the changed pixels get new labels: the others keep theirs bit for bit.
+    internal::DisparityMapToLabels(fitted, labels, dataset.disparity_numerator)
+        .copyTo(optimized.labels, cv::abs(before - fitted) > 0.0f);
     spdlog::info("plane fit: {} of {} colour segments fitted, {} pixels changed",
                  summary.fitted_segments, summary.segments, summary.changed_pixels);
     clock.Done({{"segments", summary.segments},
