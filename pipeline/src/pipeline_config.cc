@@ -280,12 +280,12 @@ void PipelineConfig::Register(config::Schema* s) {
        "a disparity plane to each segment robustly, and give the plane's value to the pixels of "
        "the segment that lie off it (foreground fattening, mismatches in weak texture); with "
        "the left-right check, consistent pixels support the fit and occluded ones are kept"});
-  s->Add("optimizer.plane_fit_segment_k", &optimizer.plane_fit_options.segmentation_k,
+  s->Add("optimizer.plane_fit_segment_k", &optimizer.plane_fit_options.segmentation.k,
          Range::GreaterThan(0.0),
          {"scale k of the graph-based colour segmentation (Felzenszwalb-Huttenlocher): larger k, "
           "larger segments"});
-  s->Add("optimizer.plane_fit_min_segment_px", &optimizer.plane_fit_options.min_segment_px,
-         Range::Between(1, 100000),
+  s->Add("optimizer.plane_fit_min_segment_px",
+         &optimizer.plane_fit_options.segmentation.min_segment_px, Range::Between(1, 100000),
          {"smallest colour segment; smaller ones are merged into a neighbour", "px"});
   s->Add("optimizer.plane_fit_inlier_px", &optimizer.plane_fit_options.inlier_px,
          Range::GreaterThan(0.0),

@@ -92,7 +92,7 @@ optimize::ExpansionOptions ExpansionOptionsOf(const PipelineConfig& options) {
 // (Midd1's textureless lamp-shade opening next to GCPs on its rim). No segmentation: unchanged.
 cv::Mat PriorInGcpSegments(const cv::Mat& prior, const std::vector<cv::Point>& gcp_pixels,
                            const cv::Mat& image_bgr,
-                           const optimize::PlaneFitOptions* segmentation) {
+                           const optimize::SegmentationOptions* segmentation) {
   if (prior.empty() || segmentation == nullptr) return prior;
   const cv::Mat segments = optimize::SegmentImage(image_bgr, *segmentation);
   double max_label = 0.0;
@@ -401,9 +401,10 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   std::vector<cv::Point> gcp_pixels;
   for (const Gcp& g : gcps.points) gcp_pixels.emplace_back(g.col, g.row);
   // … and optionally only in the colour segments that hold a GCP (optimizer.prior_segment_k).
-  optimize::PlaneFitOptions prior_segmentation = options.optimizer.plane_fit_options;
-  prior_segmentation.segmentation_k = options.optimizer.prior_segment_k;
-  const optimize::PlaneFitOptions* segmentation =
+  optimize::SegmentationOptions prior_segmentation =
+      options.optimizer.plane_fit_options.segmentation;
+  prior_segmentation.k = options.optimizer.prior_segment_k;
+  const optimize::SegmentationOptions* segmentation =
       options.optimizer.prior_segment_k > 0.0 ? &prior_segmentation : nullptr;
   const cv::Mat energy_prior =
       PriorNearGcps(PriorInGcpSegments(prior, gcp_pixels, reference.image, segmentation),

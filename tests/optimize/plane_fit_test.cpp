@@ -46,7 +46,7 @@ cv::Mat CorruptedMap() {
 // thin segments of their own.
 PlaneFitOptions Sharp() {
   PlaneFitOptions options;
-  options.segmentation_sigma = 0.1;
+  options.segmentation.sigma = 0.1;
   return options;
 }
 double MaxError(const cv::Mat& d) {
@@ -60,7 +60,7 @@ double MaxError(const cv::Mat& d) {
 }
 
 TEST(PlaneFit, ColourSegmentsFollowTheImage) {
-  const cv::Mat segments = SegmentImage(TwoRegionImage(), Sharp());
+  const cv::Mat segments = SegmentImage(TwoRegionImage(), Sharp().segmentation);
   ASSERT_EQ(segments.type(), CV_32S);
   EXPECT_NE(segments.at<int>(0, 0), segments.at<int>(0, kCols - 1));
   for (int y = 0; y < kRows; ++y) {

@@ -101,16 +101,14 @@ bool FitPlane(const std::vector<Sample>& samples, const PlaneFitOptions& options
 
 }  // namespace
 
-cv::Mat SegmentImage(const cv::Mat& image_bgr, const PlaneFitOptions& options) {
+cv::Mat SegmentImage(const cv::Mat& image_bgr, const SegmentationOptions& options) {
   Require(image_bgr.type() == CV_8UC3 && !image_bgr.empty(),
           "SegmentImage: the image must be a non-empty CV_8UC3");
-  Require(options.segmentation_sigma > 0.0 && options.segmentation_k > 0.0 &&
-              options.min_segment_px >= 1,
+  Require(options.sigma > 0.0 && options.k > 0.0 && options.min_segment_px >= 1,
           "SegmentImage: sigma > 0, k > 0 and a minimum segment size >= 1 are required");
   const cv::Ptr<cv::ximgproc::segmentation::GraphSegmentation> segmentation =
       cv::ximgproc::segmentation::createGraphSegmentation(
-          options.segmentation_sigma, static_cast<float>(options.segmentation_k),
-          options.min_segment_px);
+          options.sigma, static_cast<float>(options.k), options.min_segment_px);
   cv::Mat segments;
   segmentation->processImage(image_bgr, segments);
   return segments;
@@ -132,7 +130,7 @@ PlaneFitSummary FitSegmentPlanes(const cv::Mat& image_bgr, const cv::Mat& suppor
               options.ransac_iterations >= 1,
           "FitSegmentPlanes: inlier_px > 0, min_inlier_fraction in (0, 1], min_support_px >= 3 "
           "and ransac_iterations >= 1 are required");
-  const cv::Mat segments = SegmentImage(image_bgr, options);
+  const cv::Mat segments = SegmentImage(image_bgr, options.segmentation);
   double max_label = 0.0;
   cv::minMaxLoc(segments, nullptr, &max_label);
   const int num_segments = static_cast<int>(max_label) + 1;

@@ -18,10 +18,16 @@
 
 namespace gcpstereo::optimize {
 
+// The colour over-segmentation (also used by the pipeline to keep E_gcp in segments that hold a
+// GCP, optimizer.prior_segment_k).
+struct SegmentationOptions {
+  double sigma = 0.5;       // Gaussian smoothing before segmenting, px (> 0)
+  double k = 50.0;          // Felzenszwalb's scale k: larger = larger segments
+  int min_segment_px = 20;  // smaller segments are merged into a neighbour
+};
+
 struct PlaneFitOptions {
-  double segmentation_sigma = 0.5;    // Gaussian smoothing before segmenting, px (> 0)
-  double segmentation_k = 50.0;       // Felzenszwalb's scale k: larger = larger segments
-  int min_segment_px = 20;            // smaller segments are merged into a neighbour
+  SegmentationOptions segmentation;
   int min_support_px = 20;            // a segment with fewer support pixels is left alone
   double inlier_px = 1.0;             // |d − plane| ≤ this: the pixel lies on the plane
   double min_inlier_fraction = 0.95;  // of the support pixels, for the plane to be used
@@ -42,7 +48,7 @@ struct PlaneFitSummary {
 };
 
 // Labels of the colour segmentation of `image_bgr` (CV_8UC3): CV_32S, 0 … segments − 1.
-cv::Mat SegmentImage(const cv::Mat& image_bgr, const PlaneFitOptions& options);
+cv::Mat SegmentImage(const cv::Mat& image_bgr, const SegmentationOptions& options);
 
 // Fits the planes and rewrites `disparity` (CV_32F, the reference's size; NaN or ±inf = unknown,
 // never support and never changed). `support` is CV_8U with 255 where a pixel may support a fit
