@@ -88,11 +88,21 @@ std::string RunEvaluation(const EvalRequest& r) {
     io::DatasetRequest request{o.dataset.format, o.dataset.path, o.dataset.reference,
                                o.dataset.neighbors, o.dataset.scale};
     dataset = io::LoadDataset(request);
-    const cv::Mat depth = io::ReadPfm((fs::path(r.run_folder) / "depth.pfm").string());
-    inputs.depth_maps.emplace_back("result", depth);
-    const std::string disparity_path = (fs::path(r.run_folder) / "disparity.pfm").string();
-    if (fs::exists(disparity_path)) {
-      inputs.disparity_maps.emplace_back("result", io::ReadPfm(disparity_path));
+    // The result and D̂, as far as the run wrote them (one stopped after the propagation has
+    // only D̂).
+    const fs::path folder(r.run_folder);
+    for (const auto& [name, prefix] : {std::pair<const char*, const char*>{"result", ""},
+                                       std::pair<const char*, const char*>{"propagated",
+                                                                           "propagated_"}}) {
+      const fs::path depth_path = folder / (std::string(prefix) + "depth.pfm");
+      if (fs::exists(depth_path)) inputs.depth_maps.emplace_back(name, io::ReadPfm(depth_path.string()));
+      const fs::path disparity_path = folder / (std::string(prefix) + "disparity.pfm");
+      if (fs::exists(disparity_path)) {
+        inputs.disparity_maps.emplace_back(name, io::ReadPfm(disparity_path.string()));
+      }
+    }
+    if (inputs.depth_maps.empty()) {
+      throw IoError(r.run_folder, "a run folder without depth.pfm or propagated_depth.pfm");
     }
     report["run"] = r.run_folder;
   } else if (!r.depth.empty()) {

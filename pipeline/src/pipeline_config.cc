@@ -370,7 +370,9 @@ void PipelineConfig::Register(config::Schema* s) {
 
   s->Add("runtime.stop_after", &runtime.stop_after, {"load", "gcps", "propagation", "all"},
          {"stop after this stage (report.json and effective_config.yaml are still written): "
-          "load checks the data set and range data, gcps also builds the GCPs"});
+          "load checks the data set and range data, gcps also builds the GCPs, propagation "
+          "also writes D̂ (propagated_depth.pfm, propagated_disparity.pfm) with its metrics and "
+          "previews: a dense map from the range data alone, without stereo"});
 
   s->Add("output.previews", &output.previews, {"write the PNG previews and index.html"});
   s->Add("output.mesh", &output.mesh, {"write mesh.ply and mesh.obj (world coordinates)"});

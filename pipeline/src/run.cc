@@ -392,9 +392,71 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                 {"residual", propagated.residual}});
   }
 
-  if (stop_after == "propagation") {
+  // D̂ in the data set's units: an output of every run with GCPs, and the product of one stopped
+  // after the propagation (LiDAR depth completion without stereo).
+  cv::Mat prior_depth, prior_disparity;
+  if (!prior.empty()) {
+    prior_depth = internal::LabelMapToDepth(prior, labels);
+    if (dataset.rectified) {
+      prior_disparity = internal::LabelMapToDisparity(prior, labels, dataset.disparity_numerator);
+    }
+  }
+  // Scores the result (`depth`, `disparity`; empty when the run stopped before it) and D̂ against
+  // the data set's ground truth into report["metrics"]; returns the error previews.
+  auto evaluate = [&](const cv::Mat& depth, const cv::Mat& disparity) {
+    StageClock clock(&stages, "evaluation");
+    std::vector<std::pair<std::string, cv::Mat>> previews;
+    internal::EvaluationInputs inputs;
+    if (!depth.empty()) inputs.depth_maps.emplace_back("result", depth);
+    if (!prior_depth.empty()) inputs.depth_maps.emplace_back("propagated", prior_depth);
+    if (!disparity.empty()) inputs.disparity_maps.emplace_back("result", disparity);
+    if (!prior_disparity.empty()) inputs.disparity_maps.emplace_back("propagated", prior_disparity);
+    inputs.lidar_holdout = &gcp_stage.lidar_holdout;
+    inputs.holdout_in_disparity = gcp_stage.holdout_in_disparity;
+    inputs.holdout_not_visible = gcp_stage.lidar_holdout_not_visible;
+    report["metrics"] = internal::Evaluate(dataset, inputs, &previews);
+    clock.Done();
+    return previews;
+  };
+  // Writes D̂'s maps and the GCPs.
+  auto write_prior_and_gcps = [&] {
+    if (!prior_depth.empty()) io::WritePfm(out.Path("propagated_depth.pfm"), prior_depth);
+    if (!prior_disparity.empty()) {
+      io::WritePfm(out.Path("propagated_disparity.pfm"), prior_disparity);
+    }
     io::WriteGcpsPly(out.Path("gcps.ply"), gcps, reference.camera);
-    return finish({});
+  };
+  // Writes the previews (when output.previews is on): the result's depth (if any), D̂, the GCPs,
+  // the ground truth, then `more` in order (empty images skipped); returns the names written.
+  auto write_previews = [&](const cv::Mat& depth,
+                            const std::vector<std::pair<std::string, cv::Mat>>& more) {
+    std::vector<std::string> images;
+    if (!options.output.previews) return images;
+    double lo = labels.DepthOfLabel(0), hi = labels.DepthOfLabel(labels.count() - 1);
+    if (lo > hi) std::swap(lo, hi);
+    if (!std::isfinite(hi)) io::RobustValueRange(depth.empty() ? prior_depth : depth, &lo, &hi);
+    auto add = [&](const std::string& name, const cv::Mat& image) {
+      if (image.empty()) return;
+      io::WritePng(out.Path(name), image);
+      images.push_back(name);
+    };
+    if (!depth.empty()) add("depth.png", DepthPreview(depth, lo, hi));
+    if (!prior_depth.empty()) add("propagated.png", DepthPreview(prior_depth, lo, hi));
+    add("gcps.png", internal::RenderGcpOverlay(reference.image, gcps));
+    if (dataset.ground_truth.HasDepth()) {
+      add("ground_truth.png", DepthPreview(dataset.ground_truth.depth, lo, hi));
+    }
+    for (const auto& [name, image] : more) add(name, image);
+    return images;
+  };
+
+  if (stop_after == "propagation") {
+    const std::vector<std::pair<std::string, cv::Mat>> previews = evaluate(cv::Mat(), cv::Mat());
+    write_prior_and_gcps();
+    StageClock write_clock(&stages, "write");
+    const std::vector<std::string> images = write_previews(cv::Mat(), previews);
+    write_clock.Done();
+    return finish(images);
   }
 
   // The prior of the GCP energy: D̂, optionally only within optimizer.prior_radius_px of a GCP.
@@ -659,13 +721,6 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     disparity =
         internal::LabelMapToDisparity(optimized.labels, labels, dataset.disparity_numerator);
   }
-  cv::Mat prior_depth, prior_disparity;
-  if (!prior.empty()) {
-    prior_depth = internal::LabelMapToDepth(prior, labels);
-    if (dataset.rectified) {
-      prior_disparity = internal::LabelMapToDisparity(prior, labels, dataset.disparity_numerator);
-    }
-  }
 
   // The mesh is built now so that its OBJ text export (assimp, single-threaded: ≈ 25 CPU-s for the
   // 3 M faces of a fountain-size map) runs in the background while the evaluation, the previews and
@@ -683,30 +738,14 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     });
   }
 
-  // Evaluation against the data set's ground truth.
-  std::vector<std::pair<std::string, cv::Mat>> previews;
-  {
-    StageClock clock(&stages, "evaluation");
-    internal::EvaluationInputs inputs;
-    inputs.depth_maps.emplace_back("result", depth);
-    if (!prior_depth.empty()) inputs.depth_maps.emplace_back("propagated", prior_depth);
-    if (dataset.rectified) {
-      inputs.disparity_maps.emplace_back("result", disparity);
-      if (!prior_disparity.empty())
-        inputs.disparity_maps.emplace_back("propagated", prior_disparity);
-    }
-    inputs.lidar_holdout = &gcp_stage.lidar_holdout;
-    inputs.holdout_in_disparity = gcp_stage.holdout_in_disparity;
-    inputs.holdout_not_visible = gcp_stage.lidar_holdout_not_visible;
-    report["metrics"] = internal::Evaluate(dataset, inputs, &previews);
-    clock.Done();
-  }
+  const std::vector<std::pair<std::string, cv::Mat>> previews = evaluate(depth, disparity);
 
   // 7. Outputs, staged and moved into place at the end: the mesh, then the maps and previews.
-  std::vector<std::pair<std::string, cv::Mat>> mesh_previews;
+  std::vector<std::pair<std::string, cv::Mat>> more_previews = {
+      {"left_right_check.png", inconsistent_preview}, {"plane_fit.png", plane_fit_preview}};
   io::WritePfm(out.Path("depth.pfm"), depth);
   if (dataset.rectified) io::WritePfm(out.Path("disparity.pfm"), disparity);
-  io::WriteGcpsPly(out.Path("gcps.ply"), gcps, reference.camera);
+  write_prior_and_gcps();
   if (options.output.mesh || options.output.points) {
     StageClock clock(&stages, "mesh");
     json mesh_report = json::object();
@@ -723,7 +762,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
         const Camera view =
             mesh::OrbitCamera(reference.camera.Rescaled(enlarge), options.mesh.preview_yaw_deg,
                               options.mesh.preview_pitch_deg, mesh::MedianVertex(triangles));
-        mesh_previews.emplace_back("mesh.png",
+        more_previews.emplace_back("mesh.png",
                                    mesh::RenderMeshPreview(triangles, view, options.mesh.preview));
       }
     }
@@ -736,30 +775,11 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   }
 
   StageClock write_clock(&stages, "write");
-  std::vector<std::string> images;
-  if (options.output.previews) {
-    double lo = labels.DepthOfLabel(0), hi = labels.DepthOfLabel(labels.count() - 1);
-    if (lo > hi) std::swap(lo, hi);
-    if (!std::isfinite(hi)) io::RobustValueRange(depth, &lo, &hi);
-    auto add = [&](const std::string& name, const cv::Mat& image) {
-      io::WritePng(out.Path(name), image);
-      images.push_back(name);
-    };
-    add("depth.png", DepthPreview(depth, lo, hi));
-    if (!prior_depth.empty()) add("propagated.png", DepthPreview(prior_depth, lo, hi));
-    add("gcps.png", internal::RenderGcpOverlay(reference.image, gcps));
-    if (dataset.ground_truth.HasDepth()) {
-      add("ground_truth.png", DepthPreview(dataset.ground_truth.depth, lo, hi));
-    }
-    if (!inconsistent_preview.empty()) add("left_right_check.png", inconsistent_preview);
-    if (!plane_fit_preview.empty()) add("plane_fit.png", plane_fit_preview);
-    for (const auto& [name, image] : mesh_previews) add(name, image);
-    for (const auto& [name, image] : previews) add(name, image);
-  }
+  more_previews.insert(more_previews.end(), previews.begin(), previews.end());
+  const std::vector<std::string> images = write_previews(depth, more_previews);
   json write_report = json::object();
   if (obj_export.valid()) write_report["mesh_obj_export_seconds"] = obj_export.get();
   write_clock.Done(write_report);
-
   return finish(images);
 }
 

@@ -3,6 +3,7 @@
 // are in report.json, and the GCP energy brings the depth closer to the truth.
 #include "gcpstereo/pipeline/run.h"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -14,6 +15,7 @@
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/io/pfm.h"
+#include "gcpstereo/pipeline/evaluate.h"
 #include "gcpstereo/synth/generator.h"
 #include "gcpstereo/synth/writer.h"
 #include "test_data.h"
@@ -81,10 +83,12 @@ TEST_F(TinyScene, WritesEveryContractOutput) {
   const fs::path out = *dir_ + "/out";
   for (const char* name :
        {"depth.pfm", "gcps.ply", "report.json", "effective_config.yaml", "depth.png", "gcps.png",
-        "propagated.png", "sigma_histogram.png", "error_sigma.png", "index.html", "run.log"}) {
+        "propagated.png", "propagated_depth.pfm", "sigma_histogram.png", "error_sigma.png",
+        "index.html", "run.log"}) {
     EXPECT_TRUE(fs::exists(out / name)) << name;
   }
   EXPECT_FALSE(fs::exists(out / "disparity.pfm"));  // not rectified data
+  EXPECT_FALSE(fs::exists(out / "propagated_disparity.pfm"));
   const cv::Mat depth = io::ReadPfm((out / "depth.pfm").string());
   EXPECT_EQ(depth.cols, 160);
   EXPECT_EQ(depth.rows, 107);
@@ -110,6 +114,49 @@ TEST_F(TinyScene, GcpEnergyBringsDepthCloserToTheTruth) {
   EXPECT_LT(w["mean_abs_error"].get<double>(), wo["mean_abs_error"].get<double>());
   EXPECT_GT(w["within_n_sigma_percent"][2].get<double>(),
             wo["within_n_sigma_percent"][2].get<double>());
+}
+
+// runtime.stop_after = propagation: D̂ is the product (LiDAR depth completion without stereo): the
+// same map as a full run's propagated_depth.pfm, scored and previewed, and no stereo result.
+TEST_F(TinyScene, StopAfterPropagationWritesAndScoresThePropagatedMap) {
+  const nlohmann::json full = Run({}, "full_for_stop");
+  const nlohmann::json stopped = Run({"runtime.stop_after=propagation"}, "stop_propagation");
+  const fs::path out = fs::path(*dir_) / "stop_propagation";
+  for (const char* name : {"propagated_depth.pfm", "gcps.ply", "report.json", "propagated.png",
+                           "gcps.png", "sigma_histogram.png", "index.html"}) {
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  }
+  for (const char* name : {"depth.pfm", "depth.png", "mesh.ply"}) {
+    EXPECT_FALSE(fs::exists(out / name)) << name;
+  }
+  EXPECT_FALSE(stopped["stages"].contains("cost_and_optimization"));
+  const auto& sigma = stopped["metrics"]["depth_sigma"];
+  EXPECT_FALSE(sigma.contains("result"));
+  ASSERT_TRUE(sigma.contains("propagated"));
+  EXPECT_EQ(sigma["propagated"], full["metrics"]["depth_sigma"]["propagated"]);
+  const cv::Mat a = io::ReadPfm((out / "propagated_depth.pfm").string());
+  const cv::Mat b =
+      io::ReadPfm((fs::path(*dir_) / "full_for_stop" / "propagated_depth.pfm").string());
+  ASSERT_EQ(a.size(), b.size());
+  int finite = 0;
+  for (int r = 0; r < a.rows; ++r) {
+    for (int c = 0; c < a.cols; ++c) {
+      const float x = a.at<float>(r, c), y = b.at<float>(r, c);
+      EXPECT_TRUE(x == y || (std::isnan(x) && std::isnan(y))) << r << "," << c;
+      finite += std::isfinite(x);
+    }
+  }
+  EXPECT_GT(finite, a.total() / 2);
+
+  // `gcpstereo eval --run` on either folder scores what the run wrote, as the run itself did.
+  EvalRequest request;
+  request.run_folder = out.string();
+  const nlohmann::json rescored = nlohmann::json::parse(RunEvaluation(request));
+  EXPECT_FALSE(rescored["metrics"]["depth_sigma"].contains("result"));
+  EXPECT_EQ(rescored["metrics"]["depth_sigma"]["propagated"], sigma["propagated"]);
+  request.run_folder = (fs::path(*dir_) / "full_for_stop").string();
+  EXPECT_EQ(nlohmann::json::parse(RunEvaluation(request))["metrics"]["depth_sigma"],
+            full["metrics"]["depth_sigma"]);
 }
 
 // eval.lidar_holdout: half of the simulated scan feeds the GCPs, the other half is scored; scan

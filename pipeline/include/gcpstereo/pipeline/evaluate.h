@@ -9,7 +9,8 @@ namespace gcpstereo::pipeline {
 // a depth map or a disparity map; ground truth from the run's data set or from files.
 struct EvalRequest {
   std::string run_folder;  // a finished `gcpstereo run` folder: its depth.pfm / disparity.pfm
-                           // against the ground truth of the data set in its effective_config.yaml
+                           // and propagated_*.pfm (D̂) against the ground truth of the data set
+                           // in its effective_config.yaml
   std::string depth;       // a depth map (PFM, +inf/0/NaN = no estimate)
   std::string disparity;   // a disparity map (PFM)
 
