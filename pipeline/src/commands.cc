@@ -71,6 +71,7 @@ int Demo(const DemoArgs& args) {
       "gcp.sources=[lidar]",
       "gcp.lidar.path=" + (fs::path(data_dir) / "gt" / "laser.ply").string(),
       "gcp.downsample=16",
+      "propagation.method=local_plane",  // as configs/synthetic_fountain.yaml
       "optimizer.tiles=[1, 1]",
       "optimizer.tile_overlap=0"};
   struct Variant {

@@ -184,11 +184,22 @@ void PipelineConfig::Register(config::Schema* s) {
   AddCostFilterKeys(s, "cost.", "rectified pair", &cost.birchfield_tomasi.window);
   AddCostFilterKeys(s, "cost.sweep_", "plane sweep", &cost.plane_sweep.window);
 
-  s->Add("propagation.method", &propagation.method, {"linear_system", "weighted_median"},
+  s->Add("propagation.method", &propagation.method,
+         {"linear_system", "weighted_median", "local_plane"},
          {"linear_system = the paper's eq. 5 (a smooth, edge-aware interpolation); weighted_median "
           "= each pixel takes the colour- and distance-weighted median of the GCPs in its window "
           "(keeps thin foreground and depth edges of dense GCPs such as a LiDAR scan; no prior "
-          "farther than the radius from every GCP)"});
+          "farther than the radius from every GCP); local_plane = each pixel takes its value on a "
+          "robust colour- and distance-weighted plane through the GCPs in its window, fitted in "
+          "disparity or inverse depth (slanted surfaces between sparse GCPs such as a laser at "
+          "s = 16; no prior farther than the radius from every GCP)"});
+  s->Add("propagation.plane_radius_px", &propagation.plane_radius_px, Range::Between(1, 100),
+         {"local_plane: radius of the round window of GCPs", "px"});
+  s->Add("propagation.plane_sigma_px", &propagation.plane_sigma_px, Range::GreaterThan(0.0),
+         {"local_plane: spatial bandwidth of the weights exp(-d^2/(2 sigma^2))", "px"});
+  s->Add("propagation.plane_sigma_colour", &propagation.plane_sigma_colour,
+         Range::GreaterThan(0.0),
+         {"local_plane: colour bandwidth of the weights exp(-|ΔRGB|^2/(2 sigma^2))", "RGB"});
   s->Add("propagation.median_radius_px", &propagation.median_radius_px, Range::Between(1, 100),
          {"weighted_median: half-size of the window of GCPs", "px"});
   s->Add("propagation.median_sigma_px", &propagation.median_sigma_px, Range::GreaterThan(0.0),

@@ -87,6 +87,30 @@ optimize::ExpansionOptions ExpansionOptionsOf(const PipelineConfig& options) {
   return expansion;
 }
 
+// D̂ (eq. 5 or another propagation.method) from GCP labels, in labels. The local planes are fitted
+// to a quantity affine over a scene plane: depth labels are propagated as inverse depth and
+// converted back; inverse-depth and disparity labels already are affine.
+propagation::PropagationResult PropagateLabels(const cv::Mat& image_bgr,
+                                               const cv::Mat& sparse_labels,
+                                               const LabelSpace& labels,
+                                               const propagation::PropagationOptions& options) {
+  if (options.method != "local_plane" || labels.kind() != LabelSpaceKind::kDepth) {
+    return propagation::Propagate(image_bgr, sparse_labels, options);
+  }
+  cv::Mat inverse_depth = sparse_labels.clone();
+  inverse_depth.forEach<float>([&](float& v, const int*) {
+    if (std::isfinite(v)) v = static_cast<float>(1.0 / labels.DepthOfLabel(v));
+  });
+  propagation::PropagationResult result = propagation::Propagate(image_bgr, inverse_depth, options);
+  result.values.forEach<float>([&](float& v, const int*) {
+    v = std::isfinite(v) && v > 0.0f ? static_cast<float>(labels.LabelOfDepth(1.0 / v))
+                                     : std::numeric_limits<float>::quiet_NaN();
+  });
+  // The GCPs keep their labels exactly, not after a round trip through inverse depth.
+  sparse_labels.copyTo(result.values, sparse_labels == sparse_labels);
+  return result;
+}
+
 // D̂ restricted, given a segmentation, to the colour segments that hold a GCP (NaN in the others):
 // there D̂ interpolates GCPs of the same surface; elsewhere it is extrapolated across a colour edge
 // (Midd1's textureless lamp-shade opening next to GCPs on its rim). No segmentation: unchanged.
@@ -373,7 +397,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     StageClock clock(&stages, "propagation");
     const cv::Mat sparse = internal::SparseGcpLabels(gcps, labels, size);
     const propagation::PropagationResult propagated =
-        propagation::Propagate(reference.image, sparse, options.propagation);
+        PropagateLabels(reference.image, sparse, labels, options.propagation);
     prior = propagated.values;
     const double unreached_percent = 100.0 * propagated.num_unreached_pixels / size.area();
     if (propagated.num_unreached_pixels > 0) {
@@ -585,7 +609,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                                      options.gcp.lidar, &mirrored_gcp_pixels);
         mirrored_prior = PriorNearGcps(
             PriorInGcpSegments(
-                propagation::Propagate(mirrored_reference, sparse, options.propagation).values,
+                PropagateLabels(mirrored_reference, sparse, labels, options.propagation).values,
                 mirrored_gcp_pixels, mirrored_reference, segmentation),
             mirrored_gcp_pixels, options.optimizer.prior_radius_px);
       }

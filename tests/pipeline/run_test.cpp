@@ -159,6 +159,22 @@ TEST_F(TinyScene, StopAfterPropagationWritesAndScoresThePropagatedMap) {
             full["metrics"]["depth_sigma"]);
 }
 
+// propagation.method = local_plane on the tiny scene's laser GCPs (one per 8 × 8 block): D̂ from
+// robust local planes, fitted in inverse depth (the labels are depths), is closer to the truth
+// than the paper's membrane (measured: mean |error| 0.310 m against 0.349 m, within 3σ 55.6 %
+// against 52.1 %).
+TEST_F(TinyScene, LocalPlanesBeatTheMembraneOnASparseScan) {
+  const nlohmann::json membrane = Run({"runtime.stop_after=propagation"}, "membrane");
+  const nlohmann::json planes =
+      Run({"runtime.stop_after=propagation", "propagation.method=local_plane"}, "planes");
+  EXPECT_EQ(planes["stages"]["propagation"]["solver"], "local planes");
+  const auto& m = membrane["metrics"]["depth_sigma"]["propagated"];
+  const auto& p = planes["metrics"]["depth_sigma"]["propagated"];
+  EXPECT_LT(p["mean_abs_error"].get<double>(), m["mean_abs_error"].get<double>() - 0.02);
+  EXPECT_GT(p["within_n_sigma_percent"][2].get<double>(),
+            m["within_n_sigma_percent"][2].get<double>() + 2.0);
+}
+
 // eval.lidar_holdout: half of the simulated scan feeds the GCPs, the other half is scored; scan
 // points the camera cannot see (the scanner stands 0.4 m beside it) are not scored but counted.
 TEST_F(TinyScene, LidarHoldoutScoresOnlyVisiblePoints) {

@@ -192,7 +192,7 @@ TEST(WeightedMedianPropagation, OptionsCheckNamesTheKey) {
   } catch (const ConfigError& e) {
     EXPECT_STREQ(e.what(),
                  "propagation.method = 'kriging'. Violated constraint: one of 'linear_system', "
-                 "'weighted_median'");
+                 "'weighted_median', 'local_plane'");
   }
   EXPECT_THROW(Median(0, 2.0, 20.0).Check(), ConfigError);
   EXPECT_THROW(Median(101, 2.0, 20.0).Check(), ConfigError);

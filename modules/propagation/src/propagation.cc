@@ -148,9 +148,22 @@ void NestedDissection(int r0, int r1, int c0, int c1, int width, const std::vect
 }  // namespace
 
 void PropagationOptions::Check() const {
-  if (method != "linear_system" && method != "weighted_median") {
+  if (method != "linear_system" && method != "weighted_median" && method != "local_plane") {
     throw ConfigError(ViolatedConstraint("propagation.method", "'" + method + "'",
-                                         "one of 'linear_system', 'weighted_median'"));
+                                         "one of 'linear_system', 'weighted_median', "
+                                         "'local_plane'"));
+  }
+  if (!(plane_radius_px >= 1 && plane_radius_px <= 100)) {
+    throw ConfigError(ViolatedConstraint("propagation.plane_radius_px",
+                                         std::to_string(plane_radius_px), "1 <= radius <= 100"));
+  }
+  if (!(plane_sigma_px > 0.0) || !std::isfinite(plane_sigma_px)) {
+    throw ConfigError(ViolatedConstraint("propagation.plane_sigma_px",
+                                         FormatNumber(plane_sigma_px), "sigma > 0"));
+  }
+  if (!(plane_sigma_colour > 0.0) || !std::isfinite(plane_sigma_colour)) {
+    throw ConfigError(ViolatedConstraint("propagation.plane_sigma_colour",
+                                         FormatNumber(plane_sigma_colour), "sigma > 0"));
   }
   if (!(median_radius_px >= 1 && median_radius_px <= 100)) {
     throw ConfigError(ViolatedConstraint("propagation.median_radius_px",
@@ -382,6 +395,9 @@ PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_valu
                             const PropagationOptions& options) {
   if (options.method == "weighted_median") {
     return PropagateByWeightedMedian(image_bgr, sparse_values, options);
+  }
+  if (options.method == "local_plane") {
+    return PropagateByLocalPlanes(image_bgr, sparse_values, options);
   }
   if (ParseSparseSolverKind(options.solver) != SparseSolverKind::kCholmod) {
     return PropagateWith(image_bgr, sparse_values, options);

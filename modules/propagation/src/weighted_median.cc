@@ -65,6 +65,31 @@ void StretchAlongEdges(std::vector<Sample>* samples, const std::vector<double>& 
 
 }  // namespace
 
+namespace internal {
+
+int CountGcps(const cv::Mat& sparse_values) {
+  int count = 0;
+  for (int r = 0; r < sparse_values.rows; ++r) {
+    const float* row = sparse_values.ptr<float>(r);
+    count += static_cast<int>(
+        std::count_if(row, row + sparse_values.cols, [](float v) { return std::isfinite(v); }));
+  }
+  return count;
+}
+
+void CountUnreached(PropagationResult* result) {
+  result->num_unknowns = static_cast<int>(result->values.total()) - result->num_gcps;
+  const cv::Mat unreached = result->reached == 0;
+  result->num_unreached_pixels = cv::countNonZero(unreached);
+  if (result->num_unreached_pixels > 0) {
+    cv::Mat components;
+    result->num_unreached_regions =
+        cv::connectedComponents(unreached, components, 8, CV_32S) - 1;
+  }
+}
+
+}  // namespace internal
+
 PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
                                             const PropagationOptions& options) {
   internal::CheckPropagationInputs(image_bgr, sparse_values, options);
@@ -78,14 +103,6 @@ PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::
 
   PropagationResult result;
   result.solver = "weighted median";
-  for (int r = 0; r < height; ++r) {
-    const float* row = sparse_values.ptr<float>(r);
-    result.num_gcps +=
-        static_cast<int>(std::count_if(row, row + width, [](float v) { return std::isfinite(v); }));
-  }
-  result.values =
-      cv::Mat(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  result.reached = cv::Mat(height, width, CV_8U, cv::Scalar(0));
 
   // The spatial weights of the window, once.
   std::vector<double> spatial((2 * radius + 1) * (2 * radius + 1));
@@ -95,68 +112,41 @@ PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::
           std::exp(-(dx * dx + dy * dy) * inv_2ss);
     }
   }
-  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
-    std::vector<Sample> samples;
-    for (int r = rows.start; r < rows.end; ++r) {
-      const cv::Vec3b* image_row = image_bgr.ptr<cv::Vec3b>(r);
-      const float* own_row = sparse_values.ptr<float>(r);
-      float* out = result.values.ptr<float>(r);
-      std::uint8_t* reached = result.reached.ptr<std::uint8_t>(r);
-      for (int c = 0; c < width; ++c) {
-        if (std::isfinite(own_row[c])) {  // a GCP keeps its value
-          out[c] = own_row[c];
-          reached[c] = 255;
-          continue;
-        }
-        samples.clear();
-        const cv::Vec3b& colour = image_row[c];
-        for (int y = std::max(0, r - radius); y <= std::min(height - 1, r + radius); ++y) {
-          const float* values = sparse_values.ptr<float>(y);
-          const cv::Vec3b* pixels = image_bgr.ptr<cv::Vec3b>(y);
-          const int spatial_row = (y - r + radius) * (2 * radius + 1) + radius;  // dx = 0
-          for (int x = std::max(0, c - radius); x <= std::min(width - 1, c + radius); ++x) {
-            if (!std::isfinite(values[x])) continue;
-            double colour_distance2 = 0.0;
-            for (int k = 0; k < 3; ++k) {
-              const double d = static_cast<double>(pixels[x][k]) - colour[k];
-              colour_distance2 += d * d;
-            }
-            const double colour_factor =
-                floor + (1.0 - floor) * std::exp(-colour_distance2 * inv_2sc);
-            samples.push_back({values[x], spatial[spatial_row + x - c] * colour_factor, x - c,
-                               y - r, colour_factor});
-          }
-        }
-        if (samples.empty()) continue;
-        reached[c] = 255;
-        if (stretch > 1.0) StretchAlongEdges(&samples, spatial, radius, stretch, inv_2ss);
-        double total = 0.0;
-        for (const Sample& s : samples) total += s.weight;
-        if (!(total > 0.0)) {  // every weight underflowed: fall back to equal weights
-          for (Sample& s : samples) s.weight = 1.0;
-          total = static_cast<double>(samples.size());
-        }
-        std::stable_sort(samples.begin(), samples.end(),
-                         [](const Sample& a, const Sample& b) { return a.value < b.value; });
-        double cumulative = 0.0;
-        for (const Sample& s : samples) {
-          cumulative += s.weight;
-          if (cumulative >= 0.5 * total) {
-            out[c] = s.value;
-            break;
-          }
-        }
+  auto estimate = [&](int r, int c, std::vector<Sample>* scratch) {
+    std::vector<Sample>& samples = *scratch;
+    samples.clear();
+    const cv::Vec3b& colour = image_bgr.at<cv::Vec3b>(r, c);
+    for (int y = std::max(0, r - radius); y <= std::min(height - 1, r + radius); ++y) {
+      const float* values = sparse_values.ptr<float>(y);
+      const cv::Vec3b* pixels = image_bgr.ptr<cv::Vec3b>(y);
+      const int spatial_row = (y - r + radius) * (2 * radius + 1) + radius;  // dx = 0
+      for (int x = std::max(0, c - radius); x <= std::min(width - 1, c + radius); ++x) {
+        if (!std::isfinite(values[x])) continue;
+        const double colour_factor =
+            floor +
+            (1.0 - floor) * std::exp(-internal::ColourDistance2(pixels[x], colour) * inv_2sc);
+        samples.push_back({values[x], spatial[spatial_row + x - c] * colour_factor, x - c, y - r,
+                           colour_factor});
       }
     }
-  });
-
-  result.num_unknowns = height * width - result.num_gcps;
-  const cv::Mat unreached = result.reached == 0;
-  result.num_unreached_pixels = cv::countNonZero(unreached);
-  if (result.num_unreached_pixels > 0) {
-    cv::Mat components;
-    result.num_unreached_regions = cv::connectedComponents(unreached, components, 8, CV_32S) - 1;
-  }
+    if (samples.empty()) return std::numeric_limits<float>::quiet_NaN();
+    if (stretch > 1.0) StretchAlongEdges(&samples, spatial, radius, stretch, inv_2ss);
+    double total = 0.0;
+    for (const Sample& s : samples) total += s.weight;
+    if (!(total > 0.0)) {  // every weight underflowed: fall back to equal weights
+      for (Sample& s : samples) s.weight = 1.0;
+      total = static_cast<double>(samples.size());
+    }
+    std::stable_sort(samples.begin(), samples.end(),
+                     [](const Sample& a, const Sample& b) { return a.value < b.value; });
+    double cumulative = 0.0;
+    for (const Sample& s : samples) {
+      cumulative += s.weight;
+      if (cumulative >= 0.5 * total) return s.value;
+    }
+    return samples.back().value;  // rounding: the total was not quite reached
+  };
+  internal::EstimateNonGcpPixels<std::vector<Sample>>(sparse_values, estimate, &result);
   result.solve_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

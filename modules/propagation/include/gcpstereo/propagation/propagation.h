@@ -18,6 +18,12 @@ struct PropagationOptions {
   //     surfaces, so thin foreground and depth edges measured by dense GCPs (a LiDAR scan) stay
   //     where the GCPs put them; pixels without a GCP in their window get no prior. Measured on
   //     the KITTI frames in configs/kitti_lidar.yaml.
+  //   "local_plane": each pixel takes the value at its own position of a robust plane fitted to
+  //     the GCPs within plane_radius_px (PropagateByLocalPlanes). Not in the paper. Where the GCPs
+  //     are sparse (a laser downsampled by 16: one per 16 × 16 px), a slanted surface between them
+  //     is a plane, not the membrane of eq. 5 (which flattens between GCPs and bends towards each);
+  //     the caller passes a quantity that is affine over a scene plane (disparity, inverse depth).
+  //     Pixels without a GCP within the radius get no prior.
   std::string method = "linear_system";
   // weighted_median: window half-size, spatial and colour bandwidths of the weights
   // w = exp(−d² / (2 σs²) − ‖I_p − I_q‖² / (2 σc²)), d in px, I in RGB grey levels (0…255).
@@ -40,6 +46,14 @@ struct PropagationOptions {
   // scan line beside it — rather than the nearest GCP across it. 1 (the default): isotropic.
   // Valid: [1, 100]. Key propagation.median_edge_stretch.
   double median_edge_stretch = 1.0;
+  // local_plane: radius of the round window of GCPs, spatial and colour bandwidths of the weights
+  // w = exp(−d² / (2 σs²) − ‖I_p − I_q‖² / (2 σc²)) (d in px, I in RGB grey levels). Defaults
+  // measured on the synthetic fountain (laser GCPs at s = 16; configs/synthetic_fountain.yaml).
+  // Valid: radius in [1, 100], both sigmas > 0. Keys propagation.plane_radius_px,
+  // propagation.plane_sigma_px, propagation.plane_sigma_colour.
+  int plane_radius_px = 24;
+  double plane_sigma_px = 8.0;
+  double plane_sigma_colour = 10.0;
   // γ of eq. 5 (the colour bandwidth of w_pq = max(exp(−‖I_p − I_q‖₂ / γ), ε)), in RGB grey levels
   // (0…255 per channel). Paper: 1.25 (its colour unit is not stated); in 8-bit units that makes
   // the affinities nearly binary. Default 4, measured (tools/benchmark.py --suite table2, D̂ from
@@ -106,7 +120,8 @@ struct PropagationResult {
 // before solving, removed from the system (otherwise it is singular) and reported as NaN /
 // num_unreached_*. Throws Error on bad inputs and when the solver fails.
 //
-// options.method = "weighted_median" dispatches to PropagateByWeightedMedian.
+// options.method = "weighted_median" dispatches to PropagateByWeightedMedian, "local_plane" to
+// PropagateByLocalPlanes.
 PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
                             const PropagationOptions& options);
 
@@ -123,5 +138,18 @@ PropagationResult Propagate(const cv::Mat& image_bgr, const cv::Mat& sparse_valu
 // "weighted median", `num_unknowns` the number of pixels computed, residual 0.
 PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
                                             const PropagationOptions& options);
+
+// D̂ from local planes (options.method "local_plane"): pixel p takes c of the plane
+// v = c + a·dx + b·dy (dx, dy the offset from p) fitted to the GCPs q with ‖q − p‖ ≤ r
+// (r = plane_radius_px), weighted by w_q = exp(−‖q − p‖² / (2 σs²) − ‖I_p − I_q‖² / (2 σc²))
+// (spatial weights alone when every colour weight underflows), by iteratively reweighted least
+// squares: two Huber reweightings with the threshold 1e-3 · the window's weighted mean |v|, so
+// that a GCP on another surface pulls like an L1 residual, and a ridge of 1e-3 · Σw · r² on the
+// slopes (a window of collinear GCPs gets a flat plane). GCP pixels hold their own value; pixels
+// with no GCP within r are NaN and counted as unreached (regions: 8-connected). Same inputs,
+// outputs and errors as Propagate; `solver` is "local planes", `num_unknowns` the number of
+// non-GCP pixels, residual 0.
+PropagationResult PropagateByLocalPlanes(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
+                                         const PropagationOptions& options);
 
 }  // namespace gcpstereo::propagation
