@@ -88,17 +88,19 @@ std::string RunEvaluation(const EvalRequest& r) {
     io::DatasetRequest request{o.dataset.format, o.dataset.path, o.dataset.reference,
                                o.dataset.neighbors, o.dataset.scale};
     dataset = io::LoadDataset(request);
-    // The result and D̂, as far as the run wrote them (one stopped after the propagation has
+    // The result and D̂, as far as the run wrote them (a run stopped after the propagation has
     // only D̂).
-    const fs::path folder(r.run_folder);
-    for (const auto& [name, prefix] : {std::pair<const char*, const char*>{"result", ""},
-                                       std::pair<const char*, const char*>{"propagated",
-                                                                           "propagated_"}}) {
-      const fs::path depth_path = folder / (std::string(prefix) + "depth.pfm");
-      if (fs::exists(depth_path)) inputs.depth_maps.emplace_back(name, io::ReadPfm(depth_path.string()));
-      const fs::path disparity_path = folder / (std::string(prefix) + "disparity.pfm");
+    struct RunMap {
+      const char* name;
+      const char* file_prefix;
+    };
+    for (const RunMap map : {RunMap{"result", ""}, RunMap{"propagated", "propagated_"}}) {
+      const fs::path prefix = fs::path(r.run_folder) / map.file_prefix;
+      const std::string depth_path = prefix.string() + "depth.pfm";
+      if (fs::exists(depth_path)) inputs.depth_maps.emplace_back(map.name, io::ReadPfm(depth_path));
+      const std::string disparity_path = prefix.string() + "disparity.pfm";
       if (fs::exists(disparity_path)) {
-        inputs.disparity_maps.emplace_back(name, io::ReadPfm(disparity_path.string()));
+        inputs.disparity_maps.emplace_back(map.name, io::ReadPfm(disparity_path));
       }
     }
     if (inputs.depth_maps.empty()) {

@@ -197,8 +197,7 @@ void PipelineConfig::Register(config::Schema* s) {
          {"local_plane: radius of the round window of GCPs", "px"});
   s->Add("propagation.plane_sigma_px", &propagation.plane_sigma_px, Range::GreaterThan(0.0),
          {"local_plane: spatial bandwidth of the weights exp(-d^2/(2 sigma^2))", "px"});
-  s->Add("propagation.plane_sigma_colour", &propagation.plane_sigma_colour,
-         Range::GreaterThan(0.0),
+  s->Add("propagation.plane_sigma_colour", &propagation.plane_sigma_colour, Range::GreaterThan(0.0),
          {"local_plane: colour bandwidth of the weights exp(-|ΔRGB|^2/(2 sigma^2))", "RGB"});
   s->Add("propagation.median_radius_px", &propagation.median_radius_px, Range::Between(1, 100),
          {"weighted_median: half-size of the window of GCPs", "px"});

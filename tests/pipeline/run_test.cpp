@@ -81,10 +81,9 @@ std::string* TinyScene::dir_ = nullptr;
 TEST_F(TinyScene, WritesEveryContractOutput) {
   const nlohmann::json report = Run({}, "out");
   const fs::path out = *dir_ + "/out";
-  for (const char* name :
-       {"depth.pfm", "gcps.ply", "report.json", "effective_config.yaml", "depth.png", "gcps.png",
-        "propagated.png", "propagated_depth.pfm", "sigma_histogram.png", "error_sigma.png",
-        "index.html", "run.log"}) {
+  for (const char* name : {"depth.pfm", "gcps.ply", "report.json", "effective_config.yaml",
+                           "depth.png", "gcps.png", "propagated.png", "propagated_depth.pfm",
+                           "sigma_histogram.png", "error_sigma.png", "index.html", "run.log"}) {
     EXPECT_TRUE(fs::exists(out / name)) << name;
   }
   EXPECT_FALSE(fs::exists(out / "disparity.pfm"));  // not rectified data

@@ -54,8 +54,7 @@ TEST(LocalPlanePropagation, ReproducesASparselySampledSlantedPlane) {
   EXPECT_LT(cv::norm(planes.values, truth, cv::NORM_INF), 2.0);
 
   const PropagationResult membrane = Propagate(image, sparse, PropagationOptions());
-  const double membrane_error =
-      cv::norm(membrane.values(between), truth(between), cv::NORM_INF);
+  const double membrane_error = cv::norm(membrane.values(between), truth(between), cv::NORM_INF);
   std::cout << "[ measured ] max |error| between the GCPs: local planes " << planes_error
             << ", linear system " << membrane_error << "\n";
   EXPECT_GT(membrane_error, 3.0 * planes_error);
@@ -148,8 +147,7 @@ TEST(LocalPlanePropagation, BadOptionsNameTheirKey) {
     return std::string("no error");
   };
   EXPECT_NE(message(Planes(0, 5.0, 10.0)).find("propagation.plane_radius_px"), std::string::npos);
-  EXPECT_NE(message(Planes(101, 5.0, 10.0)).find("propagation.plane_radius_px"),
-            std::string::npos);
+  EXPECT_NE(message(Planes(101, 5.0, 10.0)).find("propagation.plane_radius_px"), std::string::npos);
   EXPECT_NE(message(Planes(5, 0.0, 10.0)).find("propagation.plane_sigma_px"), std::string::npos);
   EXPECT_NE(message(Planes(5, 5.0, -1.0)).find("propagation.plane_sigma_colour"),
             std::string::npos);

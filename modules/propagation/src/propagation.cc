@@ -158,8 +158,8 @@ void PropagationOptions::Check() const {
                                          std::to_string(plane_radius_px), "1 <= radius <= 100"));
   }
   if (!(plane_sigma_px > 0.0) || !std::isfinite(plane_sigma_px)) {
-    throw ConfigError(ViolatedConstraint("propagation.plane_sigma_px",
-                                         FormatNumber(plane_sigma_px), "sigma > 0"));
+    throw ConfigError(ViolatedConstraint("propagation.plane_sigma_px", FormatNumber(plane_sigma_px),
+                                         "sigma > 0"));
   }
   if (!(plane_sigma_colour > 0.0) || !std::isfinite(plane_sigma_colour)) {
     throw ConfigError(ViolatedConstraint("propagation.plane_sigma_colour",

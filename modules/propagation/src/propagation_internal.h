@@ -42,8 +42,8 @@ template <typename Scratch, typename Estimate>
 void EstimateNonGcpPixels(const cv::Mat& sparse_values, const Estimate& estimate,
                           PropagationResult* result) {
   result->num_gcps = CountGcps(sparse_values);
-  result->values = cv::Mat(sparse_values.size(), CV_32F,
-                           cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  result->values =
+      cv::Mat(sparse_values.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
   result->reached = cv::Mat(sparse_values.size(), CV_8U, cv::Scalar(0));
   cv::parallel_for_(cv::Range(0, sparse_values.rows), [&](const cv::Range& rows) {
     Scratch scratch;

@@ -83,8 +83,7 @@ void CountUnreached(PropagationResult* result) {
   result->num_unreached_pixels = cv::countNonZero(unreached);
   if (result->num_unreached_pixels > 0) {
     cv::Mat components;
-    result->num_unreached_regions =
-        cv::connectedComponents(unreached, components, 8, CV_32S) - 1;
+    result->num_unreached_regions = cv::connectedComponents(unreached, components, 8, CV_32S) - 1;
   }
 }
 
@@ -125,8 +124,8 @@ PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::
         const double colour_factor =
             floor +
             (1.0 - floor) * std::exp(-internal::ColourDistance2(pixels[x], colour) * inv_2sc);
-        samples.push_back({values[x], spatial[spatial_row + x - c] * colour_factor, x - c, y - r,
-                           colour_factor});
+        samples.push_back(
+            {values[x], spatial[spatial_row + x - c] * colour_factor, x - c, y - r, colour_factor});
       }
     }
     if (samples.empty()) return std::numeric_limits<float>::quiet_NaN();
