@@ -24,6 +24,7 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/propagation/sparse_solver.h"
@@ -212,6 +213,26 @@ void internal::CheckPropagationInputs(const cv::Mat& image_bgr, const cv::Mat& s
   if (sparse_values.type() != CV_32F || sparse_values.size() != image_bgr.size()) {
     throw Error("Propagate: sparse_values must be CV_32F of the image size " +
                 std::to_string(image_bgr.cols) + "x" + std::to_string(image_bgr.rows));
+  }
+}
+
+int internal::CountGcps(const cv::Mat& sparse_values) {
+  int count = 0;
+  for (int r = 0; r < sparse_values.rows; ++r) {
+    const float* row = sparse_values.ptr<float>(r);
+    count += static_cast<int>(
+        std::count_if(row, row + sparse_values.cols, [](float v) { return std::isfinite(v); }));
+  }
+  return count;
+}
+
+void internal::CountUnreached(PropagationResult* result) {
+  result->num_unknowns = static_cast<int>(result->values.total()) - result->num_gcps;
+  const cv::Mat unreached = result->reached == 0;
+  result->num_unreached_pixels = cv::countNonZero(unreached);
+  if (result->num_unreached_pixels > 0) {
+    cv::Mat components;
+    result->num_unreached_regions = cv::connectedComponents(unreached, components, 8, CV_32S) - 1;
   }
 }
 

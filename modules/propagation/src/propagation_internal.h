@@ -1,5 +1,6 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
-// Shared by the propagation methods (propagation.cc, weighted_median.cc, local_plane.cc).
+// Shared by the propagation methods (propagation.cc, weighted_median.cc, local_plane.cc); the
+// non-inline functions are defined in propagation.cc.
 #pragma once
 
 #include <cmath>

@@ -3,13 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "gcpstereo/propagation/propagation.h"
 #include "propagation_internal.h"
@@ -64,30 +62,6 @@ void StretchAlongEdges(std::vector<Sample>* samples, const std::vector<double>& 
 }
 
 }  // namespace
-
-namespace internal {
-
-int CountGcps(const cv::Mat& sparse_values) {
-  int count = 0;
-  for (int r = 0; r < sparse_values.rows; ++r) {
-    const float* row = sparse_values.ptr<float>(r);
-    count += static_cast<int>(
-        std::count_if(row, row + sparse_values.cols, [](float v) { return std::isfinite(v); }));
-  }
-  return count;
-}
-
-void CountUnreached(PropagationResult* result) {
-  result->num_unknowns = static_cast<int>(result->values.total()) - result->num_gcps;
-  const cv::Mat unreached = result->reached == 0;
-  result->num_unreached_pixels = cv::countNonZero(unreached);
-  if (result->num_unreached_pixels > 0) {
-    cv::Mat components;
-    result->num_unreached_regions = cv::connectedComponents(unreached, components, 8, CV_32S) - 1;
-  }
-}
-
-}  // namespace internal
 
 PropagationResult PropagateByWeightedMedian(const cv::Mat& image_bgr, const cv::Mat& sparse_values,
                                             const PropagationOptions& options) {
