@@ -173,6 +173,34 @@ TEST(PlaneSweep, TileEqualsCropOfFullVolume) {
   }
 }
 
+// The batch form (several regions, one preparation) gives each region the bytes of a sweep of
+// that region alone, pixel-wise and with a window filter (whose regions are grown and cropped).
+TEST(PlaneSweep, RegionBatchEqualsOneSweepPerRegion) {
+  const SceneViews s = MakeSceneViews();
+  const LabelSpace labels(LabelSpaceKind::kDepth, 12, 3.0, 7.0);
+  const std::vector<cv::Rect> regions = {cv::Rect(0, 0, 5, 5), cv::Rect(77, 40, 5, 5),
+                                         cv::Rect(155, 115, 5, 5), cv::Rect(10, 60, 31, 2)};
+  for (const int window_px : {1, 5}) {
+    PlaneSweepOptions options;
+    options.window.window_px = window_px;
+    const std::vector<CostVolume> batch =
+        ComputePlaneSweepCostForRegions(s.reference, s.neighbors, labels, regions, options);
+    ASSERT_EQ(batch.size(), regions.size());
+    for (size_t i = 0; i < regions.size(); ++i) {
+      const CostVolume one =
+          ComputePlaneSweepCost(s.reference, s.neighbors, labels, regions[i], options);
+      ASSERT_EQ(batch[i].region(), regions[i]);
+      ASSERT_EQ(batch[i].memory_bytes(), one.memory_bytes());
+      EXPECT_EQ(0, std::memcmp(batch[i].PixelData(0, 0), one.PixelData(0, 0), one.memory_bytes()))
+          << "region " << i << ", window " << window_px;
+    }
+  }
+  EXPECT_TRUE(ComputePlaneSweepCostForRegions(s.reference, s.neighbors, labels, {}, {}).empty());
+  EXPECT_THROW(ComputePlaneSweepCostForRegions(s.reference, s.neighbors, labels,
+                                               {cv::Rect(150, 0, 20, 5)}, {}),
+               Error);
+}
+
 TEST(PlaneSweep, SameBytesForAnyThreadCount) {
   const SceneViews s = MakeSceneViews();
   const LabelSpace labels(LabelSpaceKind::kDepth, 16, 3.0, 7.0);

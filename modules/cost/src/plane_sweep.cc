@@ -129,44 +129,29 @@ void MeanOfBestK(std::vector<float>& per_neighbor, int num_neighbors, int width,
   }
 }
 
-// The pixel-wise sweep of `region` (ComputePlaneSweepCost without the window filter).
-CostVolume PlaneSweepPixelCost(const View& reference, const std::vector<View>& neighbors,
-                               const LabelSpace& labels, const cv::Rect& region,
-                               const PlaneSweepOptions& options, const ProgressCallback& progress,
-                               PlaneSweepSummary* summary) {
-  const Timer timer;
+// What every region of one sweep shares: the packed neighbour images and the homographies
+// H_{n,l} (index l · neighbours + n).
+struct SweepContext {
+  std::vector<PackedImageBuffer> images;
+  std::vector<Eigen::Matrix3d> homographies;
+};
+
+SweepContext MakeSweepContext(const View& reference, const std::vector<View>& neighbors,
+                              const LabelSpace& labels, const PlaneSweepOptions& options) {
   options.Check();
   CheckView(reference, "reference");
   if (neighbors.empty()) throw Error("plane sweep: no neighbour views to match against");
   for (const View& view : neighbors) CheckView(view, "neighbour");
-  const cv::Rect image_rect(0, 0, reference.image.cols, reference.image.rows);
-  if (region.empty() || (region & image_rect) != region) {
-    std::ostringstream s;
-    s << "plane sweep: region " << region.width << "x" << region.height << " at (" << region.x
-      << ", " << region.y << ") is empty or not inside the " << image_rect.width << "x"
-      << image_rect.height << " reference image '" << reference.name << "'";
-    throw Error(s.str());
-  }
-
   const int num_labels = labels.count();
   const int num_neighbors = static_cast<int>(neighbors.size());
-  const int width = region.width;
-  const float truncation = static_cast<float>(options.truncation);
-  const bool best_k = options.aggregation == "best_k";
-  const int k = std::min(options.best_k, num_neighbors);
-  const float min_votes = static_cast<float>(options.min_voters);
-  CostVolume volume(region, num_labels, truncation);
-  const float inv_step = 1.0f / volume.cost_step();
-  const bool avx2 = internal::HaveAvx2Kernel();
-
-  std::vector<PackedImageBuffer> images;
-  images.reserve(neighbors.size());
-  for (const View& view : neighbors) images.push_back(MakePackedImage(view.image));
+  SweepContext context;
+  context.images.reserve(neighbors.size());
+  for (const View& view : neighbors) context.images.push_back(MakePackedImage(view.image));
 
   // H_{n,l} = K_n (R + t nᵀ / z_l) K_ref⁻¹ with X_n = R X_ref + t for the relative pose.
   const Camera& ref_camera = reference.camera;
   const Eigen::Matrix3d ref_k_inv = ref_camera.K.inverse();
-  std::vector<Eigen::Matrix3d> homographies(static_cast<std::size_t>(num_labels) * num_neighbors);
+  context.homographies.resize(static_cast<std::size_t>(num_labels) * num_neighbors);
   for (int n = 0; n < num_neighbors; ++n) {
     const Camera& cam = neighbors[n].camera;
     const Eigen::Matrix3d rotation =
@@ -178,9 +163,40 @@ CostVolume PlaneSweepPixelCost(const View& reference, const std::vector<View>& n
       const double inverse_depth = std::isfinite(depth) ? 1.0 / depth : 0.0;
       Eigen::Matrix3d plane = rotation;
       plane.col(2) += translation * inverse_depth;
-      homographies[static_cast<std::size_t>(l) * num_neighbors + n] = cam.K * plane * ref_k_inv;
+      context.homographies[static_cast<std::size_t>(l) * num_neighbors + n] =
+          cam.K * plane * ref_k_inv;
     }
   }
+  return context;
+}
+
+// The pixel-wise sweep of `region` (ComputePlaneSweepCost without the window filter).
+CostVolume PlaneSweepPixelCost(const SweepContext& context, const View& reference,
+                               const LabelSpace& labels, const cv::Rect& region,
+                               const PlaneSweepOptions& options, const ProgressCallback& progress,
+                               PlaneSweepSummary* summary) {
+  const Timer timer;
+  const cv::Rect image_rect(0, 0, reference.image.cols, reference.image.rows);
+  if (region.empty() || (region & image_rect) != region) {
+    std::ostringstream s;
+    s << "plane sweep: region " << region.width << "x" << region.height << " at (" << region.x
+      << ", " << region.y << ") is empty or not inside the " << image_rect.width << "x"
+      << image_rect.height << " reference image '" << reference.name << "'";
+    throw Error(s.str());
+  }
+
+  const int num_labels = labels.count();
+  const int num_neighbors = static_cast<int>(context.images.size());
+  const int width = region.width;
+  const float truncation = static_cast<float>(options.truncation);
+  const bool best_k = options.aggregation == "best_k";
+  const int k = std::min(options.best_k, num_neighbors);
+  const float min_votes = static_cast<float>(options.min_voters);
+  CostVolume volume(region, num_labels, truncation);
+  const float inv_step = 1.0f / volume.cost_step();
+  const bool avx2 = internal::HaveAvx2Kernel();
+  const std::vector<PackedImageBuffer>& images = context.images;
+  const std::vector<Eigen::Matrix3d>& homographies = context.homographies;
 
   std::atomic<std::int64_t> total_votes{0};
   std::atomic<std::int64_t> total_no_data{0};
@@ -286,22 +302,19 @@ CostVolume PlaneSweepPixelCost(const View& reference, const std::vector<View>& n
   return volume;
 }
 
-}  // namespace
-
-CostVolume ComputePlaneSweepCost(const View& reference, const std::vector<View>& neighbors,
-                                 const LabelSpace& labels, const cv::Rect& region,
-                                 const PlaneSweepOptions& options, const ProgressCallback& progress,
-                                 PlaneSweepSummary* summary) {
+// One region of a sweep: pixel-wise, or grown by the window's margin, swept and filtered.
+CostVolume SweepRegion(const SweepContext& context, const View& reference, const LabelSpace& labels,
+                       const cv::Rect& region, const PlaneSweepOptions& options,
+                       const ProgressCallback& progress, PlaneSweepSummary* summary) {
   const Timer timer;
-  options.Check();
   const cv::Rect image_rect(0, 0, reference.image.cols, reference.image.rows);
   if (options.window.window_px == 1 || region.empty() || (region & image_rect) != region) {
     // Pixel-wise (or a bad region, which the sweep reports).
-    return PlaneSweepPixelCost(reference, neighbors, labels, region, options, progress, summary);
+    return PlaneSweepPixelCost(context, reference, labels, region, options, progress, summary);
   }
   const cv::Rect outer = GrowRegion(region, options.window.MarginPx(), reference.image.size());
   CostVolume volume = FilterCostVolume(
-      PlaneSweepPixelCost(reference, neighbors, labels, outer, options, progress, summary),
+      PlaneSweepPixelCost(context, reference, labels, outer, options, progress, summary),
       reference.image, region, options.window);
   if (summary != nullptr) {
     std::int64_t no_data = 0;
@@ -316,6 +329,32 @@ CostVolume ComputePlaneSweepCost(const View& reference, const std::vector<View>&
     summary->seconds = timer.ElapsedSeconds();
   }
   return volume;
+}
+
+}  // namespace
+
+CostVolume ComputePlaneSweepCost(const View& reference, const std::vector<View>& neighbors,
+                                 const LabelSpace& labels, const cv::Rect& region,
+                                 const PlaneSweepOptions& options, const ProgressCallback& progress,
+                                 PlaneSweepSummary* summary) {
+  const Timer timer;
+  const SweepContext context = MakeSweepContext(reference, neighbors, labels, options);
+  CostVolume volume = SweepRegion(context, reference, labels, region, options, progress, summary);
+  if (summary != nullptr) summary->seconds = timer.ElapsedSeconds();  // with the packing
+  return volume;
+}
+
+std::vector<CostVolume> ComputePlaneSweepCostForRegions(const View& reference,
+                                                        const std::vector<View>& neighbors,
+                                                        const LabelSpace& labels,
+                                                        const std::vector<cv::Rect>& regions,
+                                                        const PlaneSweepOptions& options) {
+  const SweepContext context = MakeSweepContext(reference, neighbors, labels, options);
+  std::vector<CostVolume> volumes(regions.size());
+  tbb::parallel_for(std::size_t{0}, regions.size(), [&](std::size_t i) {
+    volumes[i] = SweepRegion(context, reference, labels, regions[i], options, {}, nullptr);
+  });
+  return volumes;
 }
 
 }  // namespace gcpstereo::cost

@@ -99,4 +99,13 @@ CostVolume ComputePlaneSweepCost(const View& reference, const std::vector<View>&
                                  const ProgressCallback& progress = {},
                                  PlaneSweepSummary* summary = nullptr);
 
+// The same costs for several regions at once (each volume equals ComputePlaneSweepCost of its
+// region alone); the neighbours' images are prepared once and the regions computed in parallel.
+// For many small regions, such as windows around sparse pixels. Throws as above.
+std::vector<CostVolume> ComputePlaneSweepCostForRegions(const View& reference,
+                                                        const std::vector<View>& neighbors,
+                                                        const LabelSpace& labels,
+                                                        const std::vector<cv::Rect>& regions,
+                                                        const PlaneSweepOptions& options);
+
 }  // namespace gcpstereo::cost
