@@ -175,11 +175,34 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
 
   const GcpSet merged = gcp::MergeGcpSets(sets);
   result.gcps = gcp::Downsample(merged, config.gcp.downsample, width, height);
+  json refinement;
+  if (config.gcp.stereo.refine_px > 0.0 && !dataset.rectified &&
+      std::find(config.gcp.sources.begin(), config.gcp.sources.end(), "stereo") !=
+          config.gcp.sources.end()) {
+    // Calibrated stereo GCPs, matched at gcp.stereo.image_scale, searched again on the labels.
+    gcp::GcpRefinementSummary refined;
+    result.gcps = gcp::RefineGcpsOnLabels(
+        result.gcps, dataset.reference, dataset.neighbors, provisional_labels,
+        config.gcp.stereo.refine_px, config.gcp.stereo.sigma_px, config.gcp.stereo.refine_window_px,
+        config.cost.plane_sweep, &refined);
+    spdlog::info(
+        "stereo GCPs refined on the plane-sweep cost: {} of {} kept ({} with the minimum on the "
+        "search's edge, {} without data dropped), mean shift {:.2f} labels, {:.1f} s",
+        refined.refined, refined.input, refined.dropped_at_edge, refined.dropped_no_data,
+        refined.mean_shift_labels, refined.seconds);
+    refinement = {{"input", refined.input},
+                  {"refined", refined.refined},
+                  {"dropped_at_edge", refined.dropped_at_edge},
+                  {"dropped_no_data", refined.dropped_no_data},
+                  {"mean_shift_labels", refined.mean_shift_labels},
+                  {"seconds", refined.seconds}};
+  }
   result.report = {{"sources", sources},
                    {"downsample", config.gcp.downsample},
                    {"before_downsample", merged.size()},
                    {"count", result.gcps.size()},
                    {"density_percent", gcp::DensityPercent(result.gcps, width, height)}};
+  if (!refinement.is_null()) result.report["stereo_refinement"] = refinement;
   return result;
 }
 

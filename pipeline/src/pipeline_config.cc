@@ -153,6 +153,12 @@ void PipelineConfig::Register(config::Schema* s) {
          {"calibrated views: other pairs that must confirm a GCP's depth"});
   s->Add("gcp.stereo.confirm_radius_px", &gcp.stereo.confirm_radius_px, Range::Between(0, 10),
          {"calibrated views: search radius of a confirmation", "px"});
+  s->Add("gcp.stereo.refine_px", &gcp.stereo.refine_px, Range::Between(0.0, 10.0),
+         {"calibrated views: search each GCP's depth again on the plane-sweep cost, within this "
+          "many pixels of its match's disparity at the matching scale (0 = off)",
+          "px"});
+  s->Add("gcp.stereo.refine_window_px", &gcp.stereo.refine_window_px, Range::Between(1, 15),
+         {"calibrated views: side of the square over which that cost is averaged, odd", "px"});
   s->Add("gcp.stereo.confirm_sigma", &gcp.stereo.confirm_sigma, Range::GreaterThan(0.0),
          {"calibrated views: depths agree within this many combined sigmas"});
 

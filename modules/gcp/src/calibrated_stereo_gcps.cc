@@ -19,6 +19,7 @@
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
+#include "gcpstereo/core/system.h"
 
 namespace gcpstereo::gcp {
 namespace {
@@ -282,6 +283,119 @@ CalibratedStereoGcpResult ExtractCalibratedStereoGcps(const View& reference,
   result.summary.num_gcps = static_cast<int>(result.gcps.size());
   result.summary.density_percent = DensityPercent(result.gcps, width, height);
   return result;
+}
+
+GcpSet RefineGcpsOnLabels(const GcpSet& gcps, const View& reference,
+                          const std::vector<View>& neighbors, const LabelSpace& labels,
+                          double radius_px, double sigma_px, int window_px,
+                          const cost::PlaneSweepOptions& sweep, GcpRefinementSummary* summary) {
+  const Timer timer;
+  if (!(radius_px > 0.0) || !(sigma_px > 0.0)) {
+    throw Error("RefineGcpsOnLabels: radius_px and sigma_px must be positive, got " +
+                FormatNumber(radius_px) + " and " + FormatNumber(sigma_px));
+  }
+  if (window_px < 1 || window_px % 2 == 0) {
+    throw Error("RefineGcpsOnLabels: window_px must be odd and positive, got " +
+                std::to_string(window_px));
+  }
+  const int half = window_px / 2;
+  const cv::Rect image_rect(0, 0, reference.image.cols, reference.image.rows);
+  const int num_labels = labels.count();
+  GcpRefinementSummary s;
+  // The stereo GCPs' windows, swept together (the neighbours' images are prepared once).
+  std::vector<size_t> stereo;
+  std::vector<cv::Rect> windows;
+  for (size_t i = 0; i < gcps.size(); ++i) {
+    const Gcp& g = gcps.points[i];
+    if (g.source != GcpSource::kStereo) continue;
+    stereo.push_back(i);
+    windows.push_back(cv::Rect(g.col - half, g.row - half, window_px, window_px) & image_rect);
+  }
+  cost::PlaneSweepOptions pixelwise = sweep;
+  pixelwise.window.window_px = 1;  // the window is this function's own mean
+  const std::vector<CostVolume> volumes =
+      windows.empty()
+          ? std::vector<CostVolume>()
+          : cost::ComputePlaneSweepCostForRegions(reference, neighbors, labels, windows, pixelwise);
+
+  std::vector<std::uint8_t> keep(gcps.size(), 1);
+  GcpSet refined_set = gcps;
+  double shift_sum = 0.0;
+  for (size_t k = 0; k < stereo.size(); ++k) {
+    Gcp& g = refined_set.points[stereo[k]];
+    const CostVolume& volume = volumes[k];
+    ++s.input;
+    keep[stereo[k]] = 0;
+    const double label = labels.LabelOfDepth(g.depth);
+    if (!std::isfinite(label) || !(g.sigma > 0.0)) {
+      ++s.dropped_no_data;
+      continue;
+    }
+    // The depths of the match's disparity ± radius_px.
+    const double focal_baseline = g.depth * g.depth * sigma_px / g.sigma;
+    const double disparity = focal_baseline / g.depth;
+    const double near = focal_baseline / (disparity + radius_px);
+    const double far = disparity > radius_px ? focal_baseline / (disparity - radius_px)
+                                             : std::numeric_limits<double>::infinity();
+    // Continuous labels of both ends (+∞ depth is label +∞ in depth, a finite one otherwise),
+    // clamped to the range before rounding outward.
+    const double top = num_labels - 1.0;
+    double near_label = std::clamp(labels.LabelOfDepth(near), 0.0, top);
+    double far_label = std::clamp(labels.LabelOfDepth(far), 0.0, top);
+    if (near_label > far_label) std::swap(near_label, far_label);  // inverse-depth labels
+    const int lo = static_cast<int>(std::floor(near_label));
+    const int hi = static_cast<int>(std::ceil(far_label));
+    // C(l) for the searched labels and one beyond each end (for the parabola).
+    const int first = std::max(0, lo - 1), last = std::min(num_labels - 1, hi + 1);
+    std::vector<double> sum(last - first + 1, 0.0);
+    bool complete = true;
+    for (int l = first; l <= last && complete; ++l) {
+      for (int r = 0; r < volume.height(); ++r) {
+        for (int c = 0; c < volume.width(); ++c) {
+          if (!volume.HasData(r, c, l)) complete = false;
+          sum[l - first] += volume.Cost(r, c, l);
+        }
+      }
+    }
+    if (!complete) {
+      ++s.dropped_no_data;
+      continue;
+    }
+    int best = lo;
+    for (int l = lo; l <= hi; ++l) {
+      if (sum[l - first] < sum[best - first]) best = l;
+    }
+    if ((best == lo && lo > 0) || (best == hi && hi < num_labels - 1)) {
+      ++s.dropped_at_edge;
+      continue;
+    }
+    double offset = 0.0;
+    if (best > first && best < last) {
+      const double a = sum[best - 1 - first], b = sum[best - first], c = sum[best + 1 - first];
+      const double curvature = a - 2.0 * b + c;
+      if (curvature > 0.0) offset = std::clamp(0.5 * (a - c) / curvature, -0.5, 0.5);
+    }
+    const double new_label = best + offset;
+    const double depth = labels.DepthOfLabel(new_label);
+    if (!(std::isfinite(depth) && depth > 0.0)) {
+      ++s.dropped_no_data;
+      continue;
+    }
+    g.depth = depth;
+    g.sigma =
+        0.5 * std::abs(labels.DepthOfLabel(new_label + 0.5) - labels.DepthOfLabel(new_label - 0.5));
+    shift_sum += std::abs(new_label - label);
+    ++s.refined;
+    keep[stereo[k]] = 1;
+  }
+  GcpSet out;
+  for (size_t i = 0; i < refined_set.size(); ++i) {
+    if (keep[i]) out.points.push_back(refined_set.points[i]);
+  }
+  s.mean_shift_labels = s.refined > 0 ? shift_sum / s.refined : 0.0;
+  s.seconds = timer.ElapsedSeconds();
+  if (summary != nullptr) *summary = s;
+  return out;
 }
 
 }  // namespace gcpstereo::gcp

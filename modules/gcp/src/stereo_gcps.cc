@@ -473,6 +473,15 @@ void StereoGcpOptions::Check() const {
     fail("confirm_sigma", FormatNumber(confirm_sigma), "confirm_sigma > 0");
   if (!(image_scale > 0.0 && image_scale <= 1.0))
     fail("image_scale", FormatNumber(image_scale), "0 < image_scale <= 1");
+  if (!(refine_px >= 0.0 && refine_px <= 10.0)) {
+    fail("refine_px", FormatNumber(refine_px), "0 <= refine_px <= 10");
+  }
+  if (refine_px > 0.0 && !(sigma_px > 0.0)) {
+    fail("refine_px", FormatNumber(refine_px), "refine_px > 0 needs sigma_px > 0");
+  }
+  if (refine_window_px < 1 || refine_window_px > 15 || refine_window_px % 2 == 0) {
+    fail("refine_window_px", std::to_string(refine_window_px), "odd, 1 <= refine_window_px <= 15");
+  }
   if (value != "median" && value != "ncc") fail("value", value, "one of median, ncc");
   if (texture_window_px < 3 || texture_window_px > 31 || texture_window_px % 2 == 0) {
     fail("texture_window_px", std::to_string(texture_window_px),

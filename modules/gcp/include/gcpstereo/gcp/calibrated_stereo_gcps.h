@@ -10,8 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "gcpstereo/core/labels.h"
 #include "gcpstereo/core/progress.h"
 #include "gcpstereo/core/types.h"
+#include "gcpstereo/cost/plane_sweep.h"
 #include "gcpstereo/gcp/gcp_sources.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
 
@@ -68,5 +70,37 @@ CalibratedStereoGcpResult ExtractCalibratedStereoGcps(const View& reference,
                                                       double min_depth, double max_depth,
                                                       const StereoGcpOptions& options,
                                                       const ProgressCallback& progress = nullptr);
+
+// What RefineGcpsOnLabels did.
+struct GcpRefinementSummary {
+  int input = 0;
+  int refined = 0;                 // kept, with the depth of the cost's minimum
+  int dropped_at_edge = 0;         // the minimum lay on the search window's edge: not bracketed
+  int dropped_no_data = 0;         // no neighbour saw the window at some searched label
+  double mean_shift_labels = 0.0;  // mean |new − old| label of the refined GCPs
+  double seconds = 0.0;
+};
+
+// Re-estimates the depth of stereo GCPs of calibrated views with the plane-sweep cost Φ of the
+// processing resolution (ComputePlaneSweepCostForRegions with `sweep`, pixel-wise): matches made at
+// options.image_scale < 1 are a few depth labels off, since a disparity step of the small images
+// spans several labels. A stereo GCP's σ is z²·sigma_px / (f·B) (ExtractCalibratedStereoGcps), so
+// its match had the disparity d = f·B / z with f·B = z²·sigma_px / σ. For GCP g at pixel p:
+//   the search interval is the labels between the depths f·B / (d + radius_px) and
+//   f·B / (d − radius_px) (+∞ when d <= radius_px), rounded outward, within the label range;
+//   C(l) = sum of Φ(q, l) over the window_px × window_px square around p (clipped to the image);
+//   l* = argmin C(l) over the interval (ties: lower label);
+//   a parabola through C(l* − 1), C(l*), C(l* + 1) gives the sub-label offset (clamped to ±0.5);
+//   g.depth = labels.DepthOfLabel(l* + offset), g.sigma = half the depth step there.
+// A GCP whose l* lies on the edge of its interval (and not on the label range's end) is dropped:
+// the minimum is not bracketed, so the match was farther off than the search. So is one whose
+// window has no data at a searched label, or whose σ is not positive. Order is kept; GCPs of other
+// sources pass through unchanged. Throws what the sweep throws, Error for radius_px <= 0,
+// sigma_px <= 0 or an even or non-positive window.
+GcpSet RefineGcpsOnLabels(const GcpSet& gcps, const View& reference,
+                          const std::vector<View>& neighbors, const LabelSpace& labels,
+                          double radius_px, double sigma_px, int window_px,
+                          const cost::PlaneSweepOptions& sweep,
+                          GcpRefinementSummary* summary = nullptr);
 
 }  // namespace gcpstereo::gcp

@@ -94,6 +94,13 @@ struct StereoGcpOptions {
   // matching of a wide-baseline set takes tens of minutes). Valid: (0, 1]. Key
   // gcp.stereo.image_scale.
   double image_scale = 1.0;
+  // Calibrated views: each GCP's depth is then searched again with the plane-sweep cost of the
+  // processing resolution, between the depths of its match's disparity ± refine_px (pixels of the
+  // matching scale; RefineGcpsOnLabels; 0 = off), the cost averaged over a refine_window_px square.
+  // Valid: refine_px in [0, 10] (> 0 needs sigma_px > 0), refine_window_px odd in [1, 15]. Keys
+  // gcp.stereo.refine_px, gcp.stereo.refine_window_px.
+  double refine_px = 1.0;
+  int refine_window_px = 5;
 
   void Check() const;  // throws ConfigError naming the key
 };
