@@ -156,8 +156,11 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       double d1 = pair.numerator / provisional_labels.DepthOfLabel(provisional_labels.count() - 1);
       if (!std::isfinite(d0)) d0 = 0.0;
       if (!std::isfinite(d1)) d1 = 0.0;
-      const int min_disparity = static_cast<int>(std::floor(std::min(d0, d1)));
-      const int max_disparity = static_cast<int>(std::ceil(std::max(d0, d1)));
+      // A disparity of the image width or more matches nothing: an automatic range from the
+      // views' overlap reaches it.
+      const int max_disparity = std::min(static_cast<int>(std::ceil(std::max(d0, d1))), width - 1);
+      const int min_disparity =
+          std::min(static_cast<int>(std::floor(std::min(d0, d1))), max_disparity - 1);
       ProgressBar bar("stereo GCPs", 1000);
       const gcp::StereoGcpResult stereo =
           gcp::ExtractStereoGcps(dataset.reference.image, pair.neighbor->image, min_disparity,

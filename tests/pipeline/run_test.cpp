@@ -287,6 +287,26 @@ double Bad1(const nlohmann::json& report, const char* mask) {
   return report["metrics"]["middlebury"]["result"][mask]["bad_percent"][1].get<double>();
 }
 
+// labels.min/max omitted on a rectified pair with stereo GCPs: the views' overlap allows every
+// disparity up to the image width, and the matches are searched up to width - 1 (the search
+// rejected the width itself before); the labels then come from the GCPs. Half-size tsukuba and
+// a small adaptive-weight window keep it fast.
+TEST(MiddleburyRun, AutomaticLabelRangeOfARectifiedPair) {
+  GCPSTEREO_REQUIRE_SHARED_DATA(tsukuba, "middlebury/tsukuba");
+  const std::string dir = testing::MakeTempDir("gcpstereo-auto");
+  const nlohmann::json report =
+      RunShippedConfig("middlebury_stereo.yaml", dir + "/out",
+                       {"dataset.path=" + tsukuba, "dataset.reference=scene1.row3.col3",
+                        "dataset.neighbors=[scene1.row3.col4]", "dataset.scale=0.5",
+                        "labels.min=auto", "labels.max=auto", "labels.count=16"},
+                       {"gcp.stereo.aw_window_px=9", "output.previews=false", "output.mesh=false"});
+  EXPECT_EQ(report["labels"]["range_source"], "gcps");
+  // Half-size tsukuba's disparities are 2.5…7 (the ground truth's 5…14 halved).
+  EXPECT_GT(report["labels"]["min"].get<double>(), 0.5);
+  EXPECT_LT(report["labels"]["max"].get<double>(), 12.0);
+  EXPECT_GT(report["labels"]["max"].get<double>(), 6.0);
+}
+
 // On tsukuba, the check fills the half-occluded bands left of the foreground objects with
 // background: bad-1 over all pixels with a ground truth drops (measured 3.72 % → 2.29 %) and the
 // unoccluded pixels do not get worse (1.69 % → 1.42 %). Without the plane fit, which acts after it.
