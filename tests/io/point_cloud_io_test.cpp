@@ -105,17 +105,53 @@ TEST(PointCloudIo, BinLengthNotDivisibleBy16) {
                                "(float32 x, y, z, reflectance)");
 }
 
+// Headers are checked before PCL reads the file: PCL crashed on an empty or headerless PCD and
+// allocated whatever a PLY header declared (10⁹ vertices: 16 GB before it failed).
 TEST(PointCloudIo, CorruptPly) {
   const std::string dir = testing::MakeTempDir("io-cloud");
   const std::string path = dir + "/corrupt.ply";
-  WriteRaw(path,
-           "ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\n"
-           "property float y\nproperty float z\nend_header\n0123456789");
-  EXPECT_NE(ErrorOf(path).find(path + ": cannot read point cloud"), std::string::npos)
-      << ErrorOf(path);
+  auto vertices = [](const std::string& count) {
+    return "ply\nformat binary_little_endian 1.0\nelement vertex " + count +
+           "\nproperty float x\nproperty float y\nproperty float z\nend_header\n0123456789";
+  };
+  WriteRaw(path, vertices("5"));
+  EXPECT_EQ(ErrorOf(path), path +
+                               ": not a valid PLY file: the data its header declares (60 bytes) "
+                               "is longer than the 10 bytes after the header (truncated?)");
+  WriteRaw(path, vertices("999999999"));
+  EXPECT_EQ(ErrorOf(path), path +
+                               ": not a valid PLY file: its header declares 999999999 records "
+                               "of at least 12 bytes, more than the file's " +
+                               std::to_string(vertices("999999999").size()) +
+                               " bytes (truncated or corrupt)");
   WriteRaw(path, "this is not a ply file\n");
-  EXPECT_NE(ErrorOf(path).find(path + ": cannot read point cloud"), std::string::npos)
-      << ErrorOf(path);
+  EXPECT_EQ(ErrorOf(path), path + ": not a valid PLY file: it does not begin with 'ply'");
+  WriteRaw(path, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n");
+  EXPECT_EQ(ErrorOf(path), path + ": not a valid PLY file: no 'end_header' line");
+  WriteRaw(path, "");
+  EXPECT_EQ(ErrorOf(path), path + ": point cloud file is empty");
+}
+
+TEST(PointCloudIo, CorruptPcd) {
+  const std::string dir = testing::MakeTempDir("io-cloud");
+  const std::string path = dir + "/corrupt.pcd";
+  WriteRaw(path, "");
+  EXPECT_EQ(ErrorOf(path), path + ": point cloud file is empty");
+  WriteRaw(path, "garbage\n");
+  EXPECT_EQ(ErrorOf(path), path + ": not a valid PCD file: unexpected header line 'garbage'");
+  const std::string header =
+      "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1000\nHEIGHT 1\n"
+      "POINTS 1000\n";
+  WriteRaw(path, header);
+  EXPECT_EQ(ErrorOf(path), path + ": not a valid PCD file: no 'DATA' line");
+  WriteRaw(path, header + "DATA binary\n0123456789");
+  EXPECT_EQ(ErrorOf(path), path +
+                               ": not a valid PCD file: its header declares 1000 points of at "
+                               "least 12 bytes, more than the file's " +
+                               std::to_string(header.size() + 22) +
+                               " bytes (truncated or corrupt)");
+  WriteRaw(path, header + "DATA ascii\n1 2 3\n");
+  EXPECT_NE(ErrorOf(path).find("not a valid PCD file"), std::string::npos) << ErrorOf(path);
 }
 
 TEST(PointCloudIo, NonFiniteEmptyAndUnknownExtension) {

@@ -7,7 +7,11 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/print.h>
@@ -99,6 +103,156 @@ bool ReadScalarField(const pcl::PCLPointCloud2& blob, const std::string& name,
   return true;
 }
 
+// The header of a PLY or PCD file, checked before PCL reads it: PCL crashes on an empty or
+// headerless PCD file and allocates whatever a header declares (a PLY claiming 10⁹ vertices took
+// 16 GB before failing). Throws IoError unless the header is there and the data it declares can
+// fit in the bytes that follow it (each binary record at its size, each ASCII value in ≥ 2 bytes).
+void CheckPointCloudHeader(const std::string& path, bool ply) {
+  std::error_code ec;
+  const std::uintmax_t file_bytes = std::filesystem::file_size(path, ec);
+  if (ec) throw IoError(path, "cannot read point cloud: " + ec.message());
+  if (file_bytes == 0) throw IoError(path, "point cloud file is empty");
+  std::ifstream in(path, std::ios::binary);
+  const char* kind = ply ? "PLY" : "PCD";
+  auto fail = [&](const std::string& problem) {
+    throw IoError(path, std::string("not a valid ") + kind + " file: " + problem);
+  };
+  auto type_bytes = [&](const std::string& type) -> std::uintmax_t {
+    static const std::pair<const char*, int> kTypes[] = {
+        {"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},  {"short", 2}, {"ushort", 2},
+        {"int16", 2}, {"uint16", 2},  {"int", 4},    {"uint", 4},   {"int32", 4}, {"uint32", 4},
+        {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+    for (const auto& [name, bytes] : kTypes) {
+      if (type == name) return static_cast<std::uintmax_t>(bytes);
+    }
+    fail("unknown property type '" + type + "'");
+    return 0;
+  };
+  std::string line;
+  std::uintmax_t header_bytes = 0, needed = 0;
+  bool first = true, done = false;
+  if (ply) {
+    std::string format;
+    // Per element: its count and the least bytes of one record.
+    std::vector<std::pair<std::uintmax_t, std::uintmax_t>> elements;
+    while (!done && header_bytes < (1u << 20) && std::getline(in, line)) {
+      header_bytes += line.size() + 1;
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      std::istringstream words(line);
+      std::string key;
+      words >> key;
+      if (first) {
+        if (key != "ply") fail("it does not begin with 'ply'");
+        first = false;
+      } else if (key == "format") {
+        words >> format;
+      } else if (key == "element") {
+        std::string name;
+        long double count = -1;
+        words >> name >> count;
+        if (!(count >= 0)) fail("element '" + name + "' has no valid count");
+        elements.emplace_back(static_cast<std::uintmax_t>(count), 0);
+      } else if (key == "property") {
+        if (elements.empty()) fail("a property before any element");
+        std::string type;
+        words >> type;
+        const bool ascii = format == "ascii";
+        if (type == "list") {
+          std::string count_type;
+          words >> count_type;
+          elements.back().second += ascii ? 2 : type_bytes(count_type);
+        } else {
+          elements.back().second += ascii ? 2 : type_bytes(type);
+        }
+      } else if (key == "end_header") {
+        done = true;
+      }
+    }
+    if (!done) fail("no 'end_header' line");
+    if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian") {
+      fail("unknown format '" + format + "'");
+    }
+    for (const auto& [count, bytes] : elements) {
+      if (bytes > 0 && count > file_bytes / bytes) {
+        fail("its header declares " + std::to_string(count) + " records of at least " +
+             std::to_string(bytes) + " bytes, more than the file's " + std::to_string(file_bytes) +
+             " bytes (truncated or corrupt)");
+      }
+      needed += count * bytes;
+    }
+  } else {
+    std::vector<std::uintmax_t> sizes, counts;
+    std::uintmax_t width = 0, height = 0, points = 0;
+    bool have_points = false;
+    std::string data;
+    while (!done && header_bytes < (1u << 20) && std::getline(in, line)) {
+      header_bytes += line.size() + 1;
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream words(line);
+      std::string key;
+      words >> key;
+      std::vector<long double> values;
+      if (key == "SIZE" || key == "COUNT" || key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
+        long double v = 0;
+        while (words >> v) values.push_back(v);
+        for (const long double v2 : values) {
+          if (!(v2 >= 0)) fail("negative " + key);
+        }
+        if (values.empty()) fail("'" + key + "' without a value");
+      }
+      if (key == "VERSION" || key == "FIELDS" || key == "TYPE" || key == "VIEWPOINT") {
+        // nothing to check
+      } else if (key == "SIZE") {
+        for (const long double v : values) sizes.push_back(static_cast<std::uintmax_t>(v));
+      } else if (key == "COUNT") {
+        for (const long double v : values) counts.push_back(static_cast<std::uintmax_t>(v));
+      } else if (key == "WIDTH") {
+        width = static_cast<std::uintmax_t>(values[0]);
+      } else if (key == "HEIGHT") {
+        height = static_cast<std::uintmax_t>(values[0]);
+      } else if (key == "POINTS") {
+        points = static_cast<std::uintmax_t>(values[0]);
+        have_points = true;
+      } else if (key == "DATA") {
+        words >> data;
+        done = true;
+      } else {
+        std::string shown = line.substr(0, 40);
+        for (char& c : shown) {
+          if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+        }
+        fail("unexpected header line '" + shown + "'");
+      }
+    }
+    if (!done) fail("no 'DATA' line");
+    if (sizes.empty()) fail("no 'SIZE' line");
+    if (!have_points) points = width * height;
+    std::uintmax_t record = 0;
+    for (size_t i = 0; i < sizes.size(); ++i) {
+      record += sizes[i] * (i < counts.size() ? counts[i] : 1);
+    }
+    if (data == "ascii") {
+      record = 2 * sizes.size();
+    } else if (data == "binary_compressed") {
+      record = 0;  // compressed: the size is not known from the header
+    } else if (data != "binary") {
+      fail("unknown DATA '" + data + "'");
+    }
+    if (record > 0 && points > file_bytes / record) {
+      fail("its header declares " + std::to_string(points) + " points of at least " +
+           std::to_string(record) + " bytes, more than the file's " + std::to_string(file_bytes) +
+           " bytes (truncated or corrupt)");
+    }
+    needed = points * record;
+  }
+  if (header_bytes + needed > file_bytes) {
+    fail("the data its header declares (" + std::to_string(needed) + " bytes) is longer than the " +
+         std::to_string(file_bytes - std::min(file_bytes, header_bytes)) +
+         " bytes after the header (truncated?)");
+  }
+}
+
 PointCloud ReadWithPcl(const std::string& path, bool ply) {
   pcl::PCLPointCloud2 blob;
   int status = -1;
@@ -165,8 +319,10 @@ PointCloud ReadPointCloud(const std::string& path) {
   const std::string ext = LowerExtension(path);
   PointCloud cloud;
   if (ext == ".ply") {
+    CheckPointCloudHeader(path, /*ply=*/true);
     cloud = ReadWithPcl(path, /*ply=*/true);
   } else if (ext == ".pcd") {
+    CheckPointCloudHeader(path, /*ply=*/false);
     cloud = ReadWithPcl(path, /*ply=*/false);
   } else if (ext == ".bin") {
     cloud = ReadKittiBin(path);
