@@ -66,6 +66,23 @@ void RequireSameSize(const cv::Mat& a, const std::string& a_name, const cv::Mat&
   }
 }
 
+// The largest "counted" anywhere in a metrics object (-1 when none is there).
+long long MostCounted(const nlohmann::json& j) {
+  long long most = -1;
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      if (it.key() == "counted" && it.value().is_number()) {
+        most = std::max(most, it.value().get<long long>());
+      } else {
+        most = std::max(most, MostCounted(it.value()));
+      }
+    }
+  } else if (j.is_array()) {
+    for (const auto& v : j) most = std::max(most, MostCounted(v));
+  }
+  return most;
+}
+
 }  // namespace
 
 std::string RunEvaluation(const EvalRequest& r) {
@@ -136,6 +153,9 @@ std::string RunEvaluation(const EvalRequest& r) {
       throw ConfigError("eval: give the laser's sigma (--gt-sigma map or --sigma value)");
     }
   } else {
+    if (!(r.gt_scale > 0.0)) {
+      throw ConfigError("eval: --gt-scale must be > 0, got " + FormatNumber(r.gt_scale));
+    }
     const cv::Mat disparity = ReadMap(r.disparity, 1.0, false);
     inputs.disparity_maps.emplace_back("result", disparity);
     if (r.gt_disparity.empty()) throw ConfigError("eval: --disparity needs --gt-disparity");
@@ -156,8 +176,16 @@ std::string RunEvaluation(const EvalRequest& r) {
   if (report["metrics"].empty()) {
     throw Error("eval: no ground truth to compare with (the data set has none)");
   }
+  // Scores over no pixel at all would read as a perfect result.
+  if (MostCounted(report["metrics"]) == 0) {
+    throw Error(
+        "eval: no pixel has a valid ground truth to score (all zero, non-finite or masked "
+        "out; check the ground-truth file and --gt-scale)");
+  }
   if (!r.figures.empty()) {
-    fs::create_directories(r.figures);
+    std::error_code ec;
+    fs::create_directories(r.figures, ec);
+    if (ec) throw IoError(r.figures, "cannot create the figures folder: " + ec.message());
     for (const auto& [name, image] : figures) {
       io::WritePng((fs::path(r.figures) / name).string(), image);
     }

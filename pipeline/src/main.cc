@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -88,7 +89,11 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help: usage on stdout
+    // One line on stderr, as for every other error.
+    std::fprintf(stderr, "gcpstereo: error: %s (gcpstereo --help lists the commands and options)\n",
+                 OneLine(e.what()).c_str());
+    return e.get_exit_code();
   }
 
   try {
@@ -101,6 +106,11 @@ int main(int argc, char** argv) {
     if (eval->parsed()) return gcpstereo::cli::Eval(eval_args);
   } catch (const gcpstereo::Error& e) {
     std::fprintf(stderr, "gcpstereo: error: %s\n", OneLine(e.what()).c_str());
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A folder or file the user named cannot be created or moved: name it.
+    std::fprintf(stderr, "gcpstereo: error: %s: %s\n", e.path1().string().c_str(),
+                 e.code().message().c_str());
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "gcpstereo: internal error: %s\n", OneLine(e.what()).c_str());

@@ -85,6 +85,47 @@ TEST(Cli, MissingDatasetFailsWithoutOutputs) {
   EXPECT_FALSE(fs::exists(dir / "out" / "effective_config.yaml"));
 }
 
+// Command-line mistakes are one line on stderr too, with the same prefix as every other error.
+TEST(Cli, BadCommandLineIsOneLine) {
+  for (const char* args : {"frobnicate", "eval --foo 3"}) {
+    const Result r = RunCli(args);
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_EQ(r.output.rfind("gcpstereo: error: ", 0), 0u) << r.output;
+    EXPECT_EQ(r.output.find('\n'), r.output.size() - 1) << r.output;
+  }
+}
+
+// eval refuses what would read as a perfect score over no pixel, a non-positive --gt-scale, and
+// a figures folder it cannot create (a file is in the way), each in one line naming the fault.
+TEST(Cli, EvalRefusesToScoreNothing) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli");
+  // A 2×2 PFM disparity (ones) and a ground truth of zeros (= unknown).
+  const std::string header = "Pf\n2 2\n-1.0\n";
+  std::string ones = header, zeros = header;
+  for (int i = 0; i < 4; ++i) {
+    const float one = 1.0f, zero = 0.0f;
+    ones.append(reinterpret_cast<const char*>(&one), 4);
+    zeros.append(reinterpret_cast<const char*>(&zero), 4);
+  }
+  const std::string map = WriteFile(dir / "d.pfm", ones);
+  const std::string none = WriteFile(dir / "gt0.pfm", zeros);
+  Result r = RunCli("eval --disparity " + map + " --gt-disparity " + none);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output,
+            "gcpstereo: error: eval: no pixel has a valid ground truth to score (all zero, "
+            "non-finite or masked out; check the ground-truth file and --gt-scale)\n");
+  r = RunCli("eval --disparity " + map + " --gt-disparity " + map + " --gt-scale 0");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output, "gcpstereo: error: eval: --gt-scale must be > 0, got 0\n");
+  const std::string file = WriteFile(dir / "a_file", "x");
+  r = RunCli("eval --disparity " + map + " --gt-disparity " + map + " --figures " + file);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output,
+            "gcpstereo: error: " + file + ": cannot create the figures folder: Not a directory\n");
+  r = RunCli("eval --disparity " + map + " --gt-disparity " + map, true);
+  EXPECT_EQ(r.status, 0) << r.output;
+}
+
 TEST(Cli, KeysListsContractKeys) {
   const Result r = RunCli("keys", true);
   EXPECT_EQ(r.status, 0);
