@@ -136,6 +136,15 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       double z0 = provisional_labels.DepthOfLabel(0);
       double z1 = provisional_labels.DepthOfLabel(provisional_labels.count() - 1);
       if (z0 > z1) std::swap(z0, z1);
+      if (!std::isfinite(z1)) {
+        // Infinite depth is the last depth label, or value 0 of inverse depth.
+        const bool depth_labels = provisional_labels.kind() == LabelSpaceKind::kDepth;
+        throw ConfigError(ViolatedConstraint(
+            depth_labels ? "labels.max" : "labels.min",
+            FormatNumber(depth_labels ? provisional_labels.max() : provisional_labels.min()),
+            "stereo GCPs of calibrated views search a bounded depth range, and this one reaches "
+            "infinite depth: set labels.min and labels.max (or labels.auto.max_depth)"));
+      }
       ProgressBar bar("stereo GCPs", 1000);
       const gcp::CalibratedStereoGcpResult stereo = gcp::ExtractCalibratedStereoGcps(
           dataset.reference, dataset.neighbors, z0, z1, config.gcp.stereo, bar.AsCallback());

@@ -1,12 +1,19 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/pipeline/output_folder.h"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/io/atomic_file.h"
 
 namespace fs = std::filesystem;
 
@@ -19,6 +26,22 @@ OutputFolder::OutputFolder(const std::string& final_dir) : final_dir_(final_dir)
   }
   fs::create_directories(final_dir, ec);
   if (ec) throw IoError(final_dir, "cannot create output folder: " + ec.message());
+  // Staging folders of runs that were killed (a signal runs no destructor) are removed: their
+  // process is gone.
+  for (const auto& entry : fs::directory_iterator(final_dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::string prefix = ".gcpstereo-staging-";
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string pid_text = name.substr(prefix.size());
+    if (pid_text.empty() ||
+        !std::all_of(pid_text.begin(), pid_text.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      continue;
+    const long pid = std::strtol(pid_text.c_str(), nullptr, 10);
+    std::error_code ignored;
+    if (pid > 0 && kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+      fs::remove_all(entry.path(), ignored);
+    }
+  }
   staging_dir_ =
       (fs::path(final_dir) / (".gcpstereo-staging-" + std::to_string(getpid()))).string();
   fs::remove_all(staging_dir_, ec);
@@ -41,6 +64,29 @@ std::string OutputFolder::FinalPath(const std::string& name) const {
 }
 
 void OutputFolder::Commit() {
+  // The files the previous run in this folder committed (its manifest): those this run does not
+  // write again are removed, so the folder never mixes two runs' outputs. Other files are kept.
+  const fs::path manifest = fs::path(final_dir_) / kManifestName;
+  std::vector<std::string> previous;
+  {
+    std::ifstream in(manifest);
+    for (std::string line; std::getline(in, line);) {
+      if (!line.empty() && line.find('/') == std::string::npos && line != "." && line != "..") {
+        previous.push_back(line);
+      }
+    }
+  }
+  std::vector<std::string> written;
+  for (const auto& name : names_) {
+    std::error_code ec;
+    if (fs::exists(fs::path(staging_dir_) / name, ec)) written.push_back(name);
+  }
+  for (const auto& name : previous) {
+    if (std::find(written.begin(), written.end(), name) != written.end()) continue;
+    std::error_code ec;
+    const fs::path stale = fs::path(final_dir_) / name;
+    if (fs::is_regular_file(fs::symlink_status(stale, ec))) fs::remove(stale, ec);
+  }
   for (const auto& name : names_) {
     const fs::path from = fs::path(staging_dir_) / name;
     std::error_code ec;
@@ -50,6 +96,9 @@ void OutputFolder::Commit() {
     fs::rename(from, to, ec);
     if (ec) throw IoError(to.string(), "cannot move output into place: " + ec.message());
   }
+  std::string text;
+  for (const auto& name : written) text += name + "\n";
+  io::WriteBytesAtomically(manifest.string(), text.data(), text.size());
   committed_ = true;
 }
 

@@ -348,6 +348,22 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
                       {"range_source", range_summary.source},
                       {"depth_of_first_label", labels.DepthOfLabel(0)},
                       {"depth_of_last_label", labels.DepthOfLabel(labels.count() - 1)}};
+  // GCPs the labels cannot reach: the range misses the scene (a frequent configuration slip).
+  {
+    int outside = 0;
+    for (const Gcp& g : gcps.points) {
+      const double l = labels.LabelOfDepth(g.depth);
+      if (!(l >= -0.5 && l <= labels.count() - 0.5)) ++outside;
+    }
+    report["labels"]["gcps_outside_range"] = outside;
+    if (outside > 0 && outside * 10 >= static_cast<int>(gcps.size())) {
+      spdlog::warn(
+          "{} of the {} GCPs ({:.0f} %) lie outside the label range [{}, {}] ({}): check "
+          "labels.min, labels.max and labels.space",
+          outside, gcps.size(), 100.0 * outside / gcps.size(), FormatNumber(labels.min()),
+          FormatNumber(labels.max()), LabelSpaceKindName(labels.kind()));
+    }
+  }
   // GCP quality against the ground truth (the paper's Table 1: outliers = |error| > 1 px).
   if (!gcps.empty() && dataset.ground_truth.HasDisparity()) {
     const cv::Mat sparse = internal::SparseGcpDisparity(gcps, dataset.disparity_numerator, size);
@@ -740,6 +756,26 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
 
   // 6. Depth (and disparity) maps.
   const cv::Mat depth = internal::LabelMapToDepth(optimized.labels, labels);
+  {
+    // Most pixels on the first or last label: the range is likely to miss the scene.
+    int at_ends = 0, estimated = 0;
+    const float top = static_cast<float>(labels.count() - 1);
+    for (int r = 0; r < optimized.labels.rows; ++r) {
+      const float* row = optimized.labels.ptr<float>(r);
+      for (int c = 0; c < optimized.labels.cols; ++c) {
+        if (!std::isfinite(row[c])) continue;
+        ++estimated;
+        at_ends += (row[c] <= 0.5f || row[c] >= top - 0.5f) ? 1 : 0;
+      }
+    }
+    if (estimated > 0 && at_ends * 2 > estimated) {
+      spdlog::warn(
+          "{:.0f} % of the pixels took the first or last label of [{}, {}] ({}): the label range "
+          "probably misses the scene; check labels.min, labels.max and labels.space",
+          100.0 * at_ends / estimated, FormatNumber(labels.min()), FormatNumber(labels.max()),
+          LabelSpaceKindName(labels.kind()));
+    }
+  }
   cv::Mat disparity;
   if (dataset.rectified) {
     disparity =

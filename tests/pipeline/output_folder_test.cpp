@@ -26,7 +26,8 @@ TEST(OutputFolder, NothingAppearsUntilCommit) {
     out.Commit();
   }
   EXPECT_TRUE(fs::exists(dir / "report.json"));
-  EXPECT_EQ(CountEntries(dir), 1u);  // the staging folder is gone
+  EXPECT_TRUE(fs::exists(dir / OutputFolder::kManifestName));
+  EXPECT_EQ(CountEntries(dir), 2u);  // the staging folder is gone
 }
 
 TEST(OutputFolder, AbandonedRunLeavesNoFiles) {
@@ -37,6 +38,54 @@ TEST(OutputFolder, AbandonedRunLeavesNoFiles) {
   }  // no Commit(): as when a later stage throws
   EXPECT_TRUE(fs::is_directory(dir));
   EXPECT_EQ(CountEntries(dir), 0u);
+}
+
+// A folder reused by a run with other options: the previous run's files that this run does not
+// write again go, files the user put there stay, and a failed run changes nothing.
+TEST(OutputFolder, ReusedFolderHoldsOneRunsOutputs) {
+  const fs::path dir = fs::path(testing::MakeTempDir("gcpstereo-out")) / "run";
+  {
+    OutputFolder out(dir.string());
+    for (const char* name : {"depth.pfm", "mesh.ply", "depth.png"}) {
+      std::ofstream(out.Path(name)) << "first";
+    }
+    out.Commit();
+  }
+  std::ofstream(dir / "notes.txt") << "mine";
+  {
+    OutputFolder out(dir.string());
+    std::ofstream(out.Path("depth.pfm")) << "failed";
+  }  // no Commit()
+  EXPECT_TRUE(fs::exists(dir / "mesh.ply"));
+  {
+    OutputFolder out(dir.string());
+    std::ofstream(out.Path("depth.pfm")) << "second";
+    out.Path("planned_but_not_written.png");
+    out.Commit();
+  }
+  std::ifstream depth(dir / "depth.pfm");
+  std::string text;
+  depth >> text;
+  EXPECT_EQ(text, "second");
+  EXPECT_FALSE(fs::exists(dir / "mesh.ply"));
+  EXPECT_FALSE(fs::exists(dir / "depth.png"));
+  EXPECT_TRUE(fs::exists(dir / "notes.txt"));
+  std::ifstream manifest(dir / OutputFolder::kManifestName);
+  std::string listed;
+  std::getline(manifest, listed, '\0');
+  EXPECT_EQ(listed, "depth.pfm\n");
+}
+
+// A run killed by a signal leaves its staging folder (no destructor runs); the next run into the
+// folder removes it, since its process is gone. A live process's folder is left alone.
+TEST(OutputFolder, StagingOfAKilledRunIsRemoved) {
+  const fs::path dir = fs::path(testing::MakeTempDir("gcpstereo-out")) / "run";
+  fs::create_directories(dir / ".gcpstereo-staging-999999999");
+  std::ofstream(dir / ".gcpstereo-staging-999999999" / "depth.pfm") << "partial";
+  fs::create_directories(dir / ".gcpstereo-staging-1");  // pid 1 (init) is alive
+  { OutputFolder out(dir.string()); }
+  EXPECT_FALSE(fs::exists(dir / ".gcpstereo-staging-999999999"));
+  EXPECT_TRUE(fs::exists(dir / ".gcpstereo-staging-1"));
 }
 
 }  // namespace

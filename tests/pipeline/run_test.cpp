@@ -201,6 +201,17 @@ TEST_F(TinyScene, StereoGcpsAreRefinedOnThePlaneSweepCost) {
   EXPECT_LT(after, before / 2.0);  // measured 31.2 % -> 3.8 %
 }
 
+// A label range that misses the scene (the tiny scene spans ≈ 5–12 m) is reported: every GCP
+// lies outside it (report and a warning), rather than the run quietly scoring 0 %.
+TEST_F(TinyScene, GcpsOutsideTheLabelRangeAreCounted) {
+  const nlohmann::json inside = Run({"runtime.stop_after=propagation"}, "range_ok");
+  const nlohmann::json outside =
+      Run({"runtime.stop_after=propagation", "labels.min=20", "labels.max=30"}, "range_off");
+  EXPECT_EQ(inside["labels"]["gcps_outside_range"].get<int>(), 0);
+  EXPECT_EQ(outside["labels"]["gcps_outside_range"].get<int>(),
+            outside["gcps"]["count"].get<int>());
+}
+
 // eval.lidar_holdout: half of the simulated scan feeds the GCPs, the other half is scored; scan
 // points the camera cannot see (the scanner stands 0.4 m beside it) are not scored but counted.
 TEST_F(TinyScene, LidarHoldoutScoresOnlyVisiblePoints) {

@@ -8,7 +8,8 @@ namespace gcpstereo::pipeline {
 
 // The output folder of a run. Files are written into a hidden staging folder inside it and moved
 // to their final names only by Commit(), so a run that fails leaves no partial output under a
-// final name (../shared/CONTRACT.md); the staging folder is removed unless committed.
+// final name (../shared/CONTRACT.md); the staging folder is removed unless committed, and staging
+// folders of killed runs are removed by the next run into the same folder.
 class OutputFolder {
  public:
   // Creates `final_dir` (and parents) if needed; throws IoError when that is impossible or when
@@ -25,8 +26,12 @@ class OutputFolder {
   const std::string& final_dir() const { return final_dir_; }
 
   // Moves every file written into the staging folder to its final name (replacing older files of
-  // the same name) and removes the staging folder.
+  // the same name) and removes the staging folder. The names committed are listed in the folder's
+  // kManifestName; files the previous run listed there and this run did not write are removed
+  // first, so a folder reused with other options holds one run's outputs (other files are kept).
   void Commit();
+
+  static constexpr const char* kManifestName = ".gcpstereo-outputs";
 
  private:
   std::string final_dir_;
