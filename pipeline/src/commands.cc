@@ -135,7 +135,8 @@ void AddEvalOptions(CLI::App* eval, EvalArgs* a) {
       "--gt-scale 16 --nonocc tsukuba/nonocc.png --all tsukuba/all.png --disc tsukuba/disc.png");
   eval->add_option("--run", a->run_folder,
                    "a finished gcpstereo run folder: scores its depth.pfm/disparity.pfm and "
-                   "propagated_*.pfm (D̂) against the ground truth of its data set");
+                   "propagated_*.pfm (D̂) against the ground truth of its data set, and against "
+                   "the held-out LiDAR points when the run held some out (eval.lidar_holdout)");
   eval->add_option("--depth", a->depth, "a depth map (PFM) to score");
   eval->add_option("--disparity", a->disparity, "a disparity map (PFM) to score");
   eval->add_option("--gt-depth", a->gt_depth, "ground-truth depth (PFM)");

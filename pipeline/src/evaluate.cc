@@ -11,6 +11,7 @@
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/eval/json.h"
+#include "gcpstereo/gcp/lidar_holdout.h"
 #include "gcpstereo/io/atomic_file.h"
 #include "gcpstereo/io/camera_io.h"
 #include "gcpstereo/io/dataset_io.h"
@@ -92,6 +93,7 @@ std::string RunEvaluation(const EvalRequest& r) {
   }
   Dataset dataset;  // only its ground truth is used
   internal::EvaluationInputs inputs;
+  std::vector<eval::ReferencePoint> held_out;  // eval.lidar_holdout runs: the scored points
   json report;
 
   if (!r.run_folder.empty()) {
@@ -122,6 +124,18 @@ std::string RunEvaluation(const EvalRequest& r) {
     }
     if (inputs.depth_maps.empty()) {
       throw IoError(r.run_folder, "a run folder without depth.pfm or propagated_depth.pfm");
+    }
+    // A run scored on held-out LiDAR points: the split is a deterministic function of the scan
+    // and the configuration, so it is made again here (as the GCP stage made it).
+    if (o.eval.lidar_holdout && !o.gcp.lidar_path.empty()) {
+      gcp::LidarHoldout holdout =
+          gcp::SplitScanForHoldout(io::ReadPointCloud(o.gcp.lidar_path), dataset.world_from_lidar,
+                                   dataset.reference.camera, o.gcp.lidar, o.eval.holdout_block_px,
+                                   dataset.rectified ? dataset.disparity_numerator : 0.0);
+      held_out = std::move(holdout.scored);
+      inputs.lidar_holdout = &held_out;
+      inputs.holdout_in_disparity = dataset.rectified;
+      inputs.holdout_not_visible = holdout.not_visible;
     }
     report["run"] = r.run_folder;
   } else if (!r.depth.empty()) {
@@ -174,7 +188,11 @@ std::string RunEvaluation(const EvalRequest& r) {
   std::vector<std::pair<std::string, cv::Mat>> figures;
   report["metrics"] = internal::Evaluate(dataset, inputs, &figures);
   if (report["metrics"].empty()) {
-    throw Error("eval: no ground truth to compare with (the data set has none)");
+    throw Error(r.run_folder.empty()
+                    ? "eval: no ground truth to compare with"
+                    : "eval: " + r.run_folder +
+                          ": no ground truth to compare with (the data set has none and the run "
+                          "held out no LiDAR points)");
   }
   // Scores over no pixel at all would read as a perfect result.
   if (MostCounted(report["metrics"]) == 0) {

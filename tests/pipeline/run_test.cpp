@@ -232,6 +232,11 @@ TEST_F(TinyScene, LidarHoldoutScoresOnlyVisiblePoints) {
   // Depth along z in metres; the tiny scene spans ≈ 5–12 m over 48 labels.
   EXPECT_LT(holdout["result"]["mean_abs_error"].get<double>(), 0.5);
   EXPECT_TRUE(fs::exists(fs::path(*dir_) / "holdout" / "error_holdout.png"));
+  // `gcpstereo eval --run` makes the same split again and scores the same points.
+  EvalRequest request;
+  request.run_folder = (fs::path(*dir_) / "holdout").string();
+  const nlohmann::json rescored = nlohmann::json::parse(RunEvaluation(request));
+  EXPECT_EQ(rescored["metrics"]["lidar_holdout"], holdout);
 }
 
 // optimizer.prior_radius_px keeps E_gcp near the GCPs only (one GCP per 8×8 block here).
