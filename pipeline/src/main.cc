@@ -2,9 +2,11 @@
 // The gcpstereo command line (../shared/CONTRACT.md): run, synth, eval, demo, keys.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -69,7 +71,21 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"tiny", "small", "fountain"}));
   synth->add_option("-o,--output", synth_args.output_dir, "output folder")->required();
   synth->add_option("--seed", synth_args.seed, "random seed (same seed, same bytes)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            const bool digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+              return c >= '0' && c <= '9';
+            });
+            if (!digits) return "a non-negative integer, got " + text;
+            try {
+              (void)std::stoull(text);
+            } catch (const std::out_of_range&) {
+              return "at most 18446744073709551615, got " + text;
+            }
+            return std::string();
+          },
+          "UINT64"));
 
   gcpstereo::cli::DemoArgs demo_args;
   CLI::App* demo = app.add_subcommand(

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include "gcpstereo/core/error.h"
 #include "gcpstereo/io/camera_io.h"
 #include "gcpstereo/io/image_io.h"
 #include "gcpstereo/io/pfm.h"
@@ -63,6 +64,31 @@ TEST(SynthWriterTest, WritesTheStrechaLayoutDeterministically) {
   ASSERT_EQ(laser.sigma.size(), scene.laser.size());
   EXPECT_EQ(laser.points[10], scene.laser.points[10]);
   EXPECT_EQ(laser.sigma[10], scene.laser.sigma[10]);
+}
+
+// A folder this command wrote before is replaced whole: views of the earlier set (here a stray
+// view the tiny preset does not have) do not stay behind to break a later run. A folder holding a
+// data set it did not write is refused and left as it was.
+TEST(SynthWriterTest, ReplacesItsOwnEarlierSetAndRefusesOthers) {
+  SynthOptions options;
+  options.preset = "tiny";
+  options.supersampling = 1;
+  const SyntheticScene scene = GenerateScene(options);
+  const fs::path dir = testing::MakeTempDir("synth_again");
+  WriteScene(scene, options, dir.string());
+  std::ofstream(dir / "images" / "0009.png") << "an earlier set's view";
+  std::ofstream(dir / "cameras" / "0009.png.camera") << "its camera";
+  WriteScene(scene, options, dir.string());
+  EXPECT_FALSE(fs::exists(dir / "images" / "0009.png"));
+  EXPECT_FALSE(fs::exists(dir / "cameras" / "0009.png.camera"));
+  EXPECT_TRUE(fs::exists(dir / "images" / "0005.png"));
+
+  const fs::path other = testing::MakeTempDir("synth_foreign");
+  fs::create_directories(other / "images");
+  std::ofstream(other / "images" / "0000.jpg") << "a user's photo";
+  EXPECT_THROW(WriteScene(scene, options, other.string()), IoError);
+  EXPECT_TRUE(fs::exists(other / "images" / "0000.jpg"));
+  EXPECT_FALSE(fs::exists(other / "gt"));
 }
 
 }  // namespace

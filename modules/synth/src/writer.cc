@@ -32,6 +32,20 @@ void MakeFolder(const fs::path& path) {
 
 void WriteScene(const SyntheticScene& scene, const SynthOptions& options, const std::string& dir) {
   const fs::path root(dir);
+  // A folder that already holds a data set: one this command wrote before (gt/scene.json) is
+  // replaced, so no view of another preset stays behind; any other is left untouched.
+  std::error_code ec;
+  const bool has_views =
+      (fs::is_directory(root / "images", ec) && !fs::is_empty(root / "images", ec)) ||
+      (fs::is_directory(root / "cameras", ec) && !fs::is_empty(root / "cameras", ec));
+  if (has_views) {
+    if (!fs::is_regular_file(root / "gt" / "scene.json", ec)) {
+      throw IoError(dir,
+                    "holds a data set that gcpstereo synth did not write (images/ or cameras/ "
+                    "without gt/scene.json); choose an empty or new folder");
+    }
+    for (const char* sub : {"images", "cameras", "gt"}) fs::remove_all(root / sub, ec);
+  }
   MakeFolder(root / "images");
   MakeFolder(root / "cameras");
   MakeFolder(root / "gt");
