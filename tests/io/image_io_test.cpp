@@ -71,5 +71,39 @@ TEST(ImageIo, ErrorsNameTheFile) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/f.png"));
 }
 
+// A truncated file: the decoder's own lines (OpenCV's imread, libpng) no longer reach stderr
+// ahead of the error; their reason is part of the one error message instead.
+TEST(ImageIo, TruncatedFilesGiveOneMessageWithTheDecodersReason) {
+  const std::string dir = testing::MakeTempDir("io-image");
+  WritePng(dir + "/whole.png", RandomImage(40, 40, CV_8UC3, 3));
+  std::ifstream in(dir + "/whole.png", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ofstream(dir + "/cut.png", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  std::ofstream(dir + "/cut.ppm", std::ios::binary) << "P6\n40 40\n255\n" << bytes.substr(0, 100);
+  ::testing::internal::CaptureStderr();
+  std::string png_error, ppm_error;
+  try {
+    ReadImage(dir + "/cut.png");
+  } catch (const IoError& e) {
+    png_error = e.what();
+  }
+  try {
+    ReadImage(dir + "/cut.ppm");
+  } catch (const IoError& e) {
+    ppm_error = e.what();
+  }
+  const std::string printed = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(printed, "");
+  EXPECT_EQ(png_error,
+            dir + "/cut.png: cannot decode image (unsupported or corrupt file: Read Error)");
+  EXPECT_EQ(ppm_error, dir +
+                           "/cut.ppm: cannot decode image (unsupported or corrupt file: "
+                           "Unexpected end of input stream)");
+  // A good file still reads, and reading it prints nothing.
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(ReadImage(dir + "/whole.png").size(), cv::Size(40, 40));
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+}
+
 }  // namespace
 }  // namespace gcpstereo::io

@@ -1,7 +1,14 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/io/image_io.h"
 
+#include <unistd.h>
+
+#include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <iostream>
+#include <mutex>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -12,16 +19,84 @@
 
 namespace gcpstereo::io {
 
+namespace {
+
+// Runs `read` with the process's stderr (file descriptor 2) sent to a temporary file and returns
+// what was written there: OpenCV's imread and libpng print their own lines about a corrupt file
+// before returning an empty image, and the contract allows one line per error. Serialised, since
+// the descriptor is process-wide.
+std::string WithStderrCaptured(const std::function<void()>& read) {
+  static std::mutex mutex;
+  std::lock_guard<std::mutex> lock(mutex);
+  std::FILE* capture = std::tmpfile();
+  if (capture == nullptr) {
+    read();
+    return std::string();
+  }
+  std::cerr.flush();
+  std::fflush(stderr);
+  const int saved = dup(2);
+  dup2(fileno(capture), 2);
+  struct Restore {
+    int saved;
+    ~Restore() {
+      std::cerr.flush();
+      std::fflush(stderr);
+      dup2(saved, 2);
+      close(saved);
+    }
+  };
+  {
+    Restore restore{saved};
+    read();
+  }
+  std::string text;
+  std::rewind(capture);
+  char buffer[512];
+  size_t n;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), capture)) > 0) text.append(buffer, n);
+  std::fclose(capture);
+  return text;
+}
+
+// The decoder's own reason from its captured lines ("… error: (-2:…) Unexpected end of input
+// stream in function 'readBlock'" → "Unexpected end of input stream"; "libpng error: Read Error"
+// → "Read Error"), or "" when there is none.
+std::string DecoderReason(const std::string& captured) {
+  std::string line = captured.substr(0, captured.find('\n'));
+  const size_t paren = line.find(") ", line.find("error: ("));
+  if (line.find("error: (") != std::string::npos && paren != std::string::npos) {
+    line = line.substr(paren + 2);
+    const size_t in_function = line.find(" in function");
+    if (in_function != std::string::npos) line = line.substr(0, in_function);
+  } else if (line.rfind("libpng error: ", 0) == 0) {
+    line = line.substr(14);
+  }
+  if (line.size() > 120) line = line.substr(0, 120);
+  return line;
+}
+
+}  // namespace
+
 cv::Mat ReadImage(const std::string& path, int flags) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw IoError(path, "image file not found");
   cv::Mat image;
-  try {
-    image = cv::imread(path, flags);
-  } catch (const cv::Exception& e) {
-    throw IoError(path, std::string("cannot decode image: ") + e.what());
+  std::string error;
+  const std::string captured = WithStderrCaptured([&] {
+    try {
+      image = cv::imread(path, flags);
+    } catch (const cv::Exception& e) {
+      error = e.what();
+    }
+  });
+  if (!error.empty()) throw IoError(path, "cannot decode image: " + error);
+  if (image.empty()) {
+    const std::string reason = DecoderReason(captured);
+    throw IoError(path, "cannot decode image (unsupported or corrupt file" +
+                            (reason.empty() ? std::string() : ": " + reason) + ")");
   }
-  if (image.empty()) throw IoError(path, "cannot decode image (unsupported or corrupt file)");
+  if (!captured.empty()) std::fputs(captured.c_str(), stderr);  // a decoder's warning: keep it
   return image;
 }
 
