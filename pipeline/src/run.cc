@@ -216,17 +216,33 @@ cv::Mat RenderPlaneFit(const cv::Mat& image_bgr, const cv::Mat& segments, const 
   return picture;
 }
 
+RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
+                       const std::string& config_path);
+
 }  // namespace
 
 RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir,
                        const std::string& config_path) {
-  const PipelineConfig& options = config.options();
-  Timer total;
   OutputFolder out(output_dir);
   AddLogFile(out.FinalPath("run.log"));
   struct LogFileGuard {
     ~LogFileGuard() { RemoveLogFiles(); }
   } log_file_guard;
+  try {
+    return RunInFolder(config, out, config_path);
+  } catch (const std::exception& e) {
+    // The error ends the run: run.log says so too (stderr has it from the caller).
+    LogToFilesOnly("run failed: " + std::string(e.what()));
+    throw;
+  }
+}
+
+namespace {
+
+RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
+                       const std::string& config_path) {
+  const PipelineConfig& options = config.options();
+  Timer total;
 
   json report;
   report["gcpstereo_version"] = GCPSTEREO_VERSION;
@@ -299,7 +315,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     WriteText(out.Path("report.json"), report_text);
     out.Commit();
     RunSummary summary;
-    summary.output_dir = output_dir;
+    summary.output_dir = out.final_dir();
     summary.total_seconds = total.ElapsedSeconds();
     summary.peak_memory_bytes = PeakResidentMemoryBytes();
     summary.report_json = report_text;
@@ -842,5 +858,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
   write_clock.Done(write_report);
   return finish(images);
 }
+
+}  // namespace
 
 }  // namespace gcpstereo::pipeline

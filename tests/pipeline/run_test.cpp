@@ -72,6 +72,10 @@ class TinyScene : public ::testing::Test {
     EXPECT_THROW(RunPipeline(config, out, "(test)"), E);
     EXPECT_FALSE(fs::exists(out + "/report.json"));
     EXPECT_FALSE(fs::exists(out + "/depth.pfm"));
+    // run.log, which stays, ends with the error.
+    std::ifstream log(out + "/run.log");
+    const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("[error] run failed: "), std::string::npos) << text;
   }
 
   static std::string* dir_;

@@ -79,4 +79,14 @@ void RemoveLogFiles() {
   }
 }
 
+void LogToFilesOnly(const std::string& line) {
+  const spdlog::details::log_msg message(spdlog::default_logger()->name(), spdlog::level::err,
+                                         line);
+  for (const auto& sink : spdlog::default_logger()->sinks()) {
+    if (!std::dynamic_pointer_cast<spdlog::sinks::basic_file_sink_mt>(sink)) continue;
+    sink->log(message);
+    sink->flush();
+  }
+}
+
 }  // namespace gcpstereo
