@@ -157,7 +157,8 @@ void AddEvalOptions(CLI::App* eval, EvalArgs* a) {
   eval->add_option("--all", a->mask_all, "Middlebury all mask");
   eval->add_option("--disc", a->mask_disc, "Middlebury disc mask");
   eval->add_option("--border", a->border_px, "ignored border of derived masks, px")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100000));
   eval->add_option("--report", a->report, "write the metrics as JSON to this file");
   eval->add_option("--figures", a->figures,
                    "write error maps and histograms (PNG) into this folder");

@@ -182,6 +182,13 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
     summary.source = source;
     spdlog::info("GCP source {}: {} GCPs ({:.2f} % of the pixels)", source, summary.num_gcps,
                  summary.density_percent);
+    if (summary.num_gcps == 0) {
+      spdlog::warn(
+          "GCP source {} gave no GCP ({} inputs: {} behind the camera, {} outside the image, "
+          "{} invalid, {} inconsistent); the run goes on without its GCPs",
+          source, summary.num_input, summary.num_behind_camera, summary.num_outside_image,
+          summary.num_invalid, summary.num_inconsistent);
+    }
     sources.push_back(SummaryJson(summary));
   }
 

@@ -276,7 +276,11 @@ class ValueApplier {
       p->reset();
       return;
     }
-    const double v = Number(node_);
+    double v = 0.0;
+    if (!node_.IsScalar() || !YAML::convert<double>::decode(node_, v) || std::isnan(v)) {
+      Fail("a number or auto");
+    }
+    if (std::isinf(v) && !entry_.range.Contains(v)) Fail("a finite number or auto");
     CheckRange(v);
     *p = v;
   }
