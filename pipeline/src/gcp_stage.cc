@@ -252,8 +252,9 @@ cv::Mat LabelMapToDepth(const cv::Mat& labels, const LabelSpace& space) {
     const float* in = float_labels.ptr<float>(r);
     float* out = depth.ptr<float>(r);
     for (int c = 0; c < labels.cols; ++c) {
+      const float label = in[c] < kLabelZeroSnap ? std::min(in[c], 0.0f) : in[c];
       const double d =
-          std::isfinite(in[c]) && in[c] >= 0 ? space.DepthOfLabel(in[c]) : kInvalidDepth;
+          std::isfinite(label) && label >= 0 ? space.DepthOfLabel(label) : kInvalidDepth;
       out[c] = std::isfinite(d) && d > 0 ? static_cast<float>(d) : kInvalidDepth;
     }
   }
@@ -268,12 +269,13 @@ cv::Mat LabelMapToDisparity(const cv::Mat& labels, const LabelSpace& space, doub
     const float* in = float_labels.ptr<float>(r);
     float* out = disparity.ptr<float>(r);
     for (int c = 0; c < labels.cols; ++c) {
-      if (!std::isfinite(in[c]) || in[c] < 0) {
+      const float label = in[c] < kLabelZeroSnap ? std::min(in[c], 0.0f) : in[c];
+      if (!std::isfinite(label) || label < 0) {
         out[c] = kInvalidDepth;
       } else if (space.kind() == LabelSpaceKind::kDisparity) {
-        out[c] = static_cast<float>(space.ValueOfLabel(in[c]));
+        out[c] = static_cast<float>(space.ValueOfLabel(label));
       } else {
-        out[c] = static_cast<float>(numerator / space.DepthOfLabel(in[c]));
+        out[c] = static_cast<float>(numerator / space.DepthOfLabel(label));
       }
     }
   }

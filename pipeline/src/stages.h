@@ -45,10 +45,14 @@ cv::Mat SparseGcpLabels(const GcpSet& gcps, const LabelSpace& labels, cv::Size s
 // ground-truth convention of rectified data sets (Dataset::disparity_numerator).
 cv::Mat SparseGcpDisparity(const GcpSet& gcps, double numerator, cv::Size size);
 
-// Converts continuous labels (CV_32F or CV_32S) to depth (CV_32F, +inf where invalid).
+// Converts continuous labels (CV_32F or CV_32S) to depth (CV_32F, +inf where invalid). Labels
+// below kLabelZeroSnap count as label 0: a sub-label refinement that ends a rounding error above
+// label 0 of a disparity or inverse-depth range starting at 0 would otherwise give depths of
+// 10²⁷ m instead of +inf (KITTI frame 10: 63 pixels).
+constexpr float kLabelZeroSnap = 1e-3f;
 cv::Mat LabelMapToDepth(const cv::Mat& labels, const LabelSpace& space);
 // Disparity in the data set's ground-truth convention: the label value itself for disparity
-// labels, numerator / depth otherwise (+inf where unknown).
+// labels, numerator / depth otherwise (+inf where unknown); labels snapped as above.
 cv::Mat LabelMapToDisparity(const cv::Mat& labels, const LabelSpace& space, double numerator);
 // The inverse: continuous labels (CV_32F, clamped to the label range; NaN where the disparity is
 // not finite or, for depth labels, not positive).
