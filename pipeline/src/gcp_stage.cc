@@ -99,15 +99,33 @@ RectifiedPair FindRectifiedPair(const Dataset& dataset, const std::string& purpo
 }
 
 GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
-                           const LabelSpace& provisional_labels) {
+                           const ProvisionalLabels& provisional_labels_of) {
   GcpStageResult result;
   const Camera& reference = dataset.reference.camera;
   const int width = dataset.reference.image.cols, height = dataset.reference.image.rows;
-  std::vector<GcpSet> sets;
-  json sources = json::array();
+  const std::vector<std::string>& names = config.gcp.sources;
+  std::vector<GcpSet> sets(names.size());
+  std::vector<json> source_reports(names.size());
+  // Stereo last: its search range may come from the other sources' GCPs.
+  std::vector<size_t> order;
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (names[i] != "stereo") order.push_back(i);
+  }
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == "stereo") order.push_back(i);
+  }
+  LabelSpace provisional_labels;
 
-  for (const std::string& source : config.gcp.sources) {
+  for (const size_t index : order) {
+    const std::string& source = names[index];
     gcp::GcpSourceSummary summary;
+    if (source == "stereo") {
+      std::vector<GcpSet> others;
+      for (size_t i = 0; i < names.size(); ++i) {
+        if (names[i] != "stereo") others.push_back(sets[i]);
+      }
+      provisional_labels = provisional_labels_of(gcp::MergeGcpSets(others));
+    }
     if (source == "lidar") {
       PointCloud cloud = io::ReadPointCloud(config.gcp.lidar_path);
       if (config.eval.lidar_holdout) {
@@ -125,12 +143,12 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
             holdout.gcp_part.size(), result.lidar_holdout.size(), holdout.not_visible);
         cloud = std::move(holdout.gcp_part);
       }
-      sets.push_back(gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference,
-                                             config.gcp.lidar, &summary));
+      sets[index] = gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference,
+                                            config.gcp.lidar, &summary);
     } else if (source == "depth_map") {
       const cv::Mat depth = ReadDepthMapSource(config.gcp.depth_map, dataset, config.dataset.scale);
-      sets.push_back(
-          gcp::GcpsFromDepthMap(depth, config.gcp.depth_map.sigma, GcpSource::kDepthMap, &summary));
+      sets[index] =
+          gcp::GcpsFromDepthMap(depth, config.gcp.depth_map.sigma, GcpSource::kDepthMap, &summary);
     } else if (source == "stereo" && !dataset.rectified) {
       // Calibrated views: rectify the reference with each neighbour, confirm across pairs.
       double z0 = provisional_labels.DepthOfLabel(0);
@@ -157,7 +175,7 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
             p.max_disparity_px, p.num_matches, p.num_projected, p.num_confirmed, p.seconds);
       }
       summary = stereo.summary;
-      sets.push_back(stereo.gcps);
+      sets[index] = stereo.gcps;
     } else if (source == "stereo") {
       const RectifiedPair pair = FindRectifiedPair(dataset, "gcp.sources: stereo");
       // Pair disparities of the label range: numerator / depth at both ends.
@@ -175,8 +193,8 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
           gcp::ExtractStereoGcps(dataset.reference.image, pair.neighbor->image, min_disparity,
                                  max_disparity, config.gcp.stereo, bar.AsCallback());
       bar.Finish();
-      sets.push_back(gcp::StereoGcpsToGcpSet(stereo.disparity, pair.numerator,
-                                             config.gcp.stereo.sigma_px, &summary));
+      sets[index] = gcp::StereoGcpsToGcpSet(stereo.disparity, pair.numerator,
+                                            config.gcp.stereo.sigma_px, &summary);
       summary.source = "stereo";
     }
     summary.source = source;
@@ -189,8 +207,10 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
           source, summary.num_input, summary.num_behind_camera, summary.num_outside_image,
           summary.num_invalid, summary.num_inconsistent);
     }
-    sources.push_back(SummaryJson(summary));
+    source_reports[index] = SummaryJson(summary);
   }
+  json sources = json::array();
+  for (json& j : source_reports) sources.push_back(std::move(j));
 
   const GcpSet merged = gcp::MergeGcpSets(sets);
   result.gcps = gcp::Downsample(merged, config.gcp.downsample, width, height);

@@ -338,15 +338,13 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
   if (kind == LabelSpaceKind::kDisparity && !dataset.rectified) {
     throw ConfigError("labels.space = disparity needs rectified data (middlebury, kitti_raw)");
   }
-  // Stereo GCPs search the label range before any GCP exists: it comes from the configuration or
-  // the views' overlap then.
-  LabelSpace provisional;
-  if (std::find(options.gcp.sources.begin(), options.gcp.sources.end(), "stereo") !=
-      options.gcp.sources.end()) {
-    provisional = cost::MakeLabelSpace(kind, options.labels.count, options.labels.min,
-                                       options.labels.max, GcpSet{}, reference, dataset.neighbors,
-                                       dataset.disparity_numerator, options.label_range);
-  }
+  // Stereo GCPs search the label range before their own GCPs exist: it comes from the
+  // configuration, the other sources' GCPs or the views' overlap then.
+  const internal::ProvisionalLabels provisional = [&](const GcpSet& other_gcps) {
+    return cost::MakeLabelSpace(kind, options.labels.count, options.labels.min, options.labels.max,
+                                other_gcps, reference, dataset.neighbors,
+                                dataset.disparity_numerator, options.label_range);
+  };
   internal::GcpStageResult gcp_stage = internal::RunGcpStage(options, dataset, provisional);
   const GcpSet& gcps = gcp_stage.gcps;
   report["gcps"] = gcp_stage.report;

@@ -3,6 +3,7 @@
 // summary for report.json. Only run.cc touches the output folder.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -34,10 +35,13 @@ struct GcpStageResult {
   bool holdout_in_disparity = false;                // values are disparities (rectified data)
   int lidar_holdout_not_visible = 0;  // held-out points failing the visibility test: not scored
 };
-// Builds the GCPs of every configured source. `provisional_labels` gives the disparity search
-// range of stereo GCPs.
+// The label space stereo GCPs search, given the GCPs of the other sources (empty when there are
+// none): an automatic range then comes from those GCPs instead of the views' overlap.
+using ProvisionalLabels = std::function<LabelSpace(const GcpSet& other_gcps)>;
+// Builds the GCPs of every configured source; stereo comes last so that its search range can use
+// the other sources' GCPs. The report lists the sources in the configuration's order.
 GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
-                           const LabelSpace& provisional_labels);
+                           const ProvisionalLabels& provisional_labels);
 
 // Continuous labels of the GCPs on the reference grid (NaN elsewhere), for propagation.
 cv::Mat SparseGcpLabels(const GcpSet& gcps, const LabelSpace& labels, cv::Size size);

@@ -205,6 +205,19 @@ TEST_F(TinyScene, StereoGcpsAreRefinedOnThePlaneSweepCost) {
   EXPECT_LT(after, before / 2.0);  // measured 31.2 % -> 3.8 %
 }
 
+// LiDAR and image matches together with an automatic label range: the matches search the range
+// the scan's GCPs give (the views' overlap alone is unbounded in depth, which failed before), and
+// the report lists the sources in the configuration's order.
+TEST_F(TinyScene, StereoWithLidarTakesTheRangeFromTheScan) {
+  const nlohmann::json report =
+      Run({"gcp.sources=[stereo, lidar]", "runtime.stop_after=propagation"}, "stereo_lidar");
+  ASSERT_EQ(report["gcps"]["sources"].size(), 2u);
+  EXPECT_EQ(report["gcps"]["sources"][0]["source"], "stereo");
+  EXPECT_EQ(report["gcps"]["sources"][1]["source"], "lidar");
+  EXPECT_GT(report["gcps"]["sources"][0]["gcps"].get<int>(), 20);
+  EXPECT_EQ(report["labels"]["range_source"], "gcps");
+}
+
 // A label range that misses the scene (the tiny scene spans ≈ 5–12 m) is reported: every GCP
 // lies outside it (report and a warning), rather than the run quietly scoring 0 %.
 TEST_F(TinyScene, GcpsOutsideTheLabelRangeAreCounted) {
