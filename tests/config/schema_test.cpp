@@ -84,6 +84,18 @@ TEST_F(SchemaTest, UnknownKeyNamesFileLineAndSuggestion) {
   EXPECT_EQ(ErrorOf("colour: red\n"), "test.yaml:1: unknown configuration key 'colour'");
 }
 
+// YAML lets a later key replace an earlier one silently; a configuration that says a key twice
+// is a mistake (which one did the user mean?), so it fails naming both lines, also across two
+// copies of a section. A section may repeat with other keys (effective_config.yaml does).
+TEST_F(SchemaTest, KeyGivenTwiceNamesBothLines) {
+  EXPECT_EQ(ErrorOf("labels:\n  count: 3\n  count: 5\n"),
+            "test.yaml:3: labels.count is given twice (first on line 2)");
+  EXPECT_EQ(ErrorOf("labels:\n  count: 3\noptimizer:\n  lambda_s: 3\nlabels:\n  count: 4\n"),
+            "test.yaml:6: labels.count is given twice (first on line 2)");
+  EXPECT_EQ(ErrorOf("labels:\n  count: 3\noptimizer:\n  lambda_s: 3\nlabels:\n  min: 4\n"),
+            "no error");
+}
+
 TEST_F(SchemaTest, OutOfRangeNamesKeyValueAndBound) {
   EXPECT_EQ(ErrorOf("optimizer:\n  lambda_s: -1\n"),
             "test.yaml:2: optimizer.lambda_s = -1. Violated constraint: optimizer.lambda_s >= 0");

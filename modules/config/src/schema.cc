@@ -8,6 +8,7 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
+#include <map>
 #include <set>
 #include <sstream>
 #include <variant>
@@ -303,6 +304,7 @@ namespace {
 struct Walker {
   const std::map<std::string, Schema::Entry*>& by_key;
   const std::string& source;
+  std::map<std::string, YAML::Mark>* seen;  // keys applied so far, where
 
   bool IsSection(const std::string& prefix) const {
     auto it = by_key.lower_bound(prefix + ".");
@@ -326,6 +328,14 @@ struct Walker {
       const YAML::Node& value = kv.second;
       auto it = by_key.find(key);
       if (it != by_key.end()) {
+        // A key given twice (YAML would let the later one win silently): which did the user
+        // mean? Sections may repeat (effective_config.yaml groups keys that way); keys may not.
+        const auto [first, fresh] = seen->emplace(key, kv.first.Mark());
+        if (!fresh) {
+          throw ConfigError(Where(source, kv.first) + ": " + key +
+                            " is given twice (first on line " +
+                            std::to_string(first->second.line + 1) + ")");
+        }
         ValueApplier(*it->second, value, Where(source, kv.first)).Apply(it->second->target);
         it->second->set = true;
       } else if (IsSection(key)) {
@@ -356,7 +366,8 @@ void Schema::LoadString(const std::string& yaml_text, const std::string& source)
   }
   if (root.IsNull()) return;  // an empty file keeps every default
   if (!root.IsMap()) throw ConfigError(source + ": the configuration must be a mapping of keys");
-  Walker{by_key_, source}.Walk(root, "");
+  std::map<std::string, YAML::Mark> seen;
+  Walker{by_key_, source, &seen}.Walk(root, "");
 }
 
 void Schema::LoadFile(const std::string& path) {
