@@ -216,28 +216,45 @@ cv::Mat RenderPlaneFit(const cv::Mat& image_bgr, const cv::Mat& segments, const 
   return picture;
 }
 
-RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
-                       const std::string& config_path);
-
-}  // namespace
-
-RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir,
-                       const std::string& config_path) {
-  OutputFolder out(output_dir);
-  AddLogFile(out.FinalPath("run.log"));
-  struct LogFileGuard {
-    ~LogFileGuard() { RemoveLogFiles(); }
-  } log_file_guard;
-  try {
-    return RunInFolder(config, out, config_path);
-  } catch (const std::exception& e) {
-    // The error ends the run: run.log says so too (stderr has it from the caller).
-    LogToFilesOnly("run failed: " + std::string(e.what()));
-    throw;
+// GCPs the labels cannot reach: the range misses the scene (a frequent configuration slip).
+// Warns when they are 10 % of the GCPs or more; returns their number.
+int WarnOfGcpsOutsideLabels(const GcpSet& gcps, const LabelSpace& labels) {
+  int outside = 0;
+  for (const Gcp& g : gcps.points) {
+    const double l = labels.LabelOfDepth(g.depth);
+    if (!(l >= -0.5 && l <= labels.count() - 0.5)) ++outside;
   }
+  if (outside > 0 && outside * 10 >= static_cast<int>(gcps.size())) {
+    spdlog::warn(
+        "{} of the {} GCPs ({:.0f} %) lie outside the label range [{}, {}] ({}): check "
+        "labels.min, labels.max and labels.space",
+        outside, gcps.size(), 100.0 * outside / gcps.size(), FormatNumber(labels.min()),
+        FormatNumber(labels.max()), LabelSpaceKindName(labels.kind()));
+  }
+  return outside;
 }
 
-namespace {
+// Warns when most estimated pixels of `label_map` took the first or last label: the range is
+// likely to miss the scene.
+void WarnOfLabelsAtTheRangeEnds(const cv::Mat& label_map, const LabelSpace& labels) {
+  int at_ends = 0, estimated = 0;
+  const float top = static_cast<float>(labels.count() - 1);
+  for (int r = 0; r < label_map.rows; ++r) {
+    const float* row = label_map.ptr<float>(r);
+    for (int c = 0; c < label_map.cols; ++c) {
+      if (!std::isfinite(row[c])) continue;
+      ++estimated;
+      at_ends += (row[c] <= 0.5f || row[c] >= top - 0.5f) ? 1 : 0;
+    }
+  }
+  if (estimated > 0 && at_ends * 2 > estimated) {
+    spdlog::warn(
+        "{:.0f} % of the pixels took the first or last label of [{}, {}] ({}): the label range "
+        "probably misses the scene; check labels.min, labels.max and labels.space",
+        100.0 * at_ends / estimated, FormatNumber(labels.min()), FormatNumber(labels.max()),
+        LabelSpaceKindName(labels.kind()));
+  }
+}
 
 RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
                        const std::string& config_path) {
@@ -362,22 +379,7 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
                       {"range_source", range_summary.source},
                       {"depth_of_first_label", labels.DepthOfLabel(0)},
                       {"depth_of_last_label", labels.DepthOfLabel(labels.count() - 1)}};
-  // GCPs the labels cannot reach: the range misses the scene (a frequent configuration slip).
-  {
-    int outside = 0;
-    for (const Gcp& g : gcps.points) {
-      const double l = labels.LabelOfDepth(g.depth);
-      if (!(l >= -0.5 && l <= labels.count() - 0.5)) ++outside;
-    }
-    report["labels"]["gcps_outside_range"] = outside;
-    if (outside > 0 && outside * 10 >= static_cast<int>(gcps.size())) {
-      spdlog::warn(
-          "{} of the {} GCPs ({:.0f} %) lie outside the label range [{}, {}] ({}): check "
-          "labels.min, labels.max and labels.space",
-          outside, gcps.size(), 100.0 * outside / gcps.size(), FormatNumber(labels.min()),
-          FormatNumber(labels.max()), LabelSpaceKindName(labels.kind()));
-    }
-  }
+  report["labels"]["gcps_outside_range"] = WarnOfGcpsOutsideLabels(gcps, labels);
   // GCP quality against the ground truth (the paper's Table 1: outliers = |error| > 1 px).
   if (!gcps.empty() && dataset.ground_truth.HasDisparity()) {
     const cv::Mat sparse = internal::SparseGcpDisparity(gcps, dataset.disparity_numerator, size);
@@ -770,26 +772,7 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
 
   // 6. Depth (and disparity) maps.
   const cv::Mat depth = internal::LabelMapToDepth(optimized.labels, labels);
-  {
-    // Most pixels on the first or last label: the range is likely to miss the scene.
-    int at_ends = 0, estimated = 0;
-    const float top = static_cast<float>(labels.count() - 1);
-    for (int r = 0; r < optimized.labels.rows; ++r) {
-      const float* row = optimized.labels.ptr<float>(r);
-      for (int c = 0; c < optimized.labels.cols; ++c) {
-        if (!std::isfinite(row[c])) continue;
-        ++estimated;
-        at_ends += (row[c] <= 0.5f || row[c] >= top - 0.5f) ? 1 : 0;
-      }
-    }
-    if (estimated > 0 && at_ends * 2 > estimated) {
-      spdlog::warn(
-          "{:.0f} % of the pixels took the first or last label of [{}, {}] ({}): the label range "
-          "probably misses the scene; check labels.min, labels.max and labels.space",
-          100.0 * at_ends / estimated, FormatNumber(labels.min()), FormatNumber(labels.max()),
-          LabelSpaceKindName(labels.kind()));
-    }
-  }
+  WarnOfLabelsAtTheRangeEnds(optimized.labels, labels);
   cv::Mat disparity;
   if (dataset.rectified) {
     disparity =
@@ -858,5 +841,21 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
 }
 
 }  // namespace
+
+RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir,
+                       const std::string& config_path) {
+  OutputFolder out(output_dir);
+  AddLogFile(out.FinalPath("run.log"));
+  struct LogFileGuard {
+    ~LogFileGuard() { RemoveLogFiles(); }
+  } log_file_guard;
+  try {
+    return RunInFolder(config, out, config_path);
+  } catch (const std::exception& e) {
+    // The error ends the run: run.log says so too (stderr has it from the caller).
+    LogToFilesOnly("run failed: " + std::string(e.what()));
+    throw;
+  }
+}
 
 }  // namespace gcpstereo::pipeline
