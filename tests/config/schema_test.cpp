@@ -20,6 +20,7 @@ struct Options {
   std::vector<std::string> sources{"lidar"};
   std::vector<int> tiles{2, 2};
   std::optional<double> min;
+  std::optional<int> levels = 16;
 };
 
 class SchemaTest : public ::testing::Test {
@@ -34,6 +35,7 @@ class SchemaTest : public ::testing::Test {
     schema.Add("gcp.sources", &o.sources, {"lidar", "depth_map", "stereo"}, {"sources"});
     schema.Add("optimizer.tiles", &o.tiles, 2, Range::AtLeast(1), {"tiles"});
     schema.Add("labels.min", &o.min, Range::GreaterThan(0.0), {"min", "m"});
+    schema.Add("labels.levels", &o.levels, Range::Between(2, 4096), {"levels"});
   }
 
   std::string ErrorOf(const std::string& yaml) {
@@ -75,6 +77,22 @@ TEST_F(SchemaTest, EmptyListAndAutoAndEmptyDocument) {
   EXPECT_FALSE(o.min.has_value());
   schema.LoadString("", "empty.yaml");
   EXPECT_EQ(o.lambda_s, 20.0);
+}
+
+TEST_F(SchemaTest, IntegerOrAuto) {
+  EXPECT_NE(schema.ToYaml().find("levels: 16"), std::string::npos);
+  schema.LoadString("labels:\n  levels: auto\n", "t");
+  EXPECT_FALSE(o.levels.has_value());
+  EXPECT_NE(schema.ToYaml().find("levels: auto"), std::string::npos);
+  schema.ApplyOverride("labels.levels=40");
+  ASSERT_TRUE(o.levels.has_value());
+  EXPECT_EQ(*o.levels, 40);
+  EXPECT_EQ(ErrorOf("labels:\n  levels: 2.5\n"),
+            "test.yaml:2: labels.levels = 2.5. Violated constraint: an integer or auto");
+  EXPECT_EQ(ErrorOf("labels:\n  levels: 1\n"),
+            "test.yaml:2: labels.levels = 1. Violated constraint: 2 <= labels.levels <= 4096");
+  EXPECT_NE(schema.Describe().find("labels.levels  (integer or auto, default 16"),
+            std::string::npos);
 }
 
 TEST_F(SchemaTest, UnknownKeyNamesFileLineAndSuggestion) {
@@ -156,7 +174,8 @@ TEST_F(SchemaTest, OverridesParseYamlValues) {
 }
 
 TEST_F(SchemaTest, EffectiveYamlRoundTrips) {
-  schema.LoadString("optimizer:\n  lambda_s: 3\n  tiles: [1, 3]\nlabels:\n  min: 2\n", "t");
+  schema.LoadString(
+      "optimizer:\n  lambda_s: 3\n  tiles: [1, 3]\nlabels:\n  min: 2\n  levels: auto\n", "t");
   const std::string yaml = schema.ToYaml();
   EXPECT_NE(yaml.find("# smoothness weight (paper: λs)"), std::string::npos) << yaml;
   Options fresh;
@@ -169,7 +188,9 @@ TEST_F(SchemaTest, EffectiveYamlRoundTrips) {
   other.Add("gcp.sources", &fresh.sources, {"lidar", "depth_map", "stereo"}, {"f"});
   other.Add("optimizer.tiles", &fresh.tiles, 2, Range::AtLeast(1), {"g"});
   other.Add("labels.min", &fresh.min, Range::GreaterThan(0.0), {"h"});
+  other.Add("labels.levels", &fresh.levels, Range::Between(2, 4096), {"i"});
   other.LoadString(yaml, "effective.yaml");
+  EXPECT_FALSE(fresh.levels.has_value());
   EXPECT_EQ(fresh.lambda_s, 3.0);
   EXPECT_EQ(fresh.tiles, (std::vector<int>{1, 3}));
   ASSERT_TRUE(fresh.min.has_value());

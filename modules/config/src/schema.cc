@@ -92,7 +92,7 @@ std::string Range::Describe(const std::string& name) const {
 // One registered key.
 struct Schema::Entry {
   using Target = std::variant<double*, int*, bool*, std::string*, std::vector<std::string>*,
-                              std::vector<int>*, std::optional<double>*>;
+                              std::vector<int>*, std::optional<double>*, std::optional<int>*>;
   std::string key;
   Target target;
   Range range;
@@ -120,6 +120,8 @@ struct Schema::Entry {
                           : "list of integers";
       case 6:
         return "number or auto";
+      case 7:
+        return "integer or auto";
     }
     return "?";
   }
@@ -131,6 +133,8 @@ struct Schema::Entry {
           using T = std::decay_t<decltype(*p)>;
           if constexpr (std::is_same_v<T, std::optional<double>>) {
             n = *p ? ShortestNumberNode(**p) : YAML::Node("auto");
+          } else if constexpr (std::is_same_v<T, std::optional<int>>) {
+            n = *p ? YAML::Node(**p) : YAML::Node("auto");
           } else if constexpr (std::is_same_v<T, std::vector<int>> ||
                                std::is_same_v<T, std::vector<std::string>>) {
             n = YAML::Node(YAML::NodeType::Sequence);
@@ -187,6 +191,9 @@ void Schema::Add(const std::string& key, std::vector<int>* field, std::size_t fi
   GCPSTEREO_ADD_ENTRY(e->fixed_size = fixed_size; e->range = range)
 }
 void Schema::Add(const std::string& key, std::optional<double>* field, Range range, KeyDoc doc) {
+  GCPSTEREO_ADD_ENTRY(e->range = range)
+}
+void Schema::Add(const std::string& key, std::optional<int>* field, Range range, KeyDoc doc) {
   GCPSTEREO_ADD_ENTRY(e->range = range)
 }
 #undef GCPSTEREO_ADD_ENTRY
@@ -282,6 +289,16 @@ class ValueApplier {
       Fail("a number or auto");
     }
     if (std::isinf(v) && !entry_.range.Contains(v)) Fail("a finite number or auto");
+    CheckRange(v);
+    *p = v;
+  }
+  void Assign(std::optional<int>* p) const {
+    if (node_.IsNull() || (node_.IsScalar() && node_.Scalar() == "auto")) {
+      p->reset();
+      return;
+    }
+    int v = 0;
+    if (!node_.IsScalar() || !YAML::convert<int>::decode(node_, v)) Fail("an integer or auto");
     CheckRange(v);
     *p = v;
   }

@@ -73,6 +73,8 @@ class Schema {
            KeyDoc doc);
   // A number that may be omitted (null, "auto" or absent = std::nullopt).
   void Add(const std::string& key, std::optional<double>* field, Range range, KeyDoc doc);
+  // An integer that may be omitted (null, "auto" or absent = std::nullopt).
+  void Add(const std::string& key, std::optional<int>* field, Range range, KeyDoc doc);
 
   // Applies a YAML file / text on top of the current values. `source` names it in errors.
   void LoadFile(const std::string& path);
