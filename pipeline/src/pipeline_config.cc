@@ -48,10 +48,12 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("labels.space", &labels.space, {"depth", "inverse_depth", "disparity"},
          {"spacing of the discrete hypotheses; disparity only for rectified data"});
   s->Add("labels.count", &labels.count, Range::Between(2, 4096),
-         {"number of discrete hypotheses (paper: 360 depth levels)"});
+         {"number of discrete hypotheses (paper: 360 depth levels); auto = one per pixel of "
+          "disparity (labels.space disparity)"});
   s->Add("labels.min", &labels.min, Range::AtLeast(0.0),
          {"lowest hypothesis in the space's unit (depth: data set unit; disparity: px in the "
-          "ground truth's convention); auto = from the GCPs or the views' overlap"});
+          "ground truth's convention); auto = from the GCPs, the rectified pair's matched "
+          "disparities (disparity labels: 0) or the views' overlap"});
   s->Add("labels.max", &labels.max, Range::AtLeast(0.0),
          {"highest hypothesis; auto as labels.min"});
 

@@ -356,11 +356,12 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
     throw ConfigError("labels.space = disparity needs rectified data (middlebury, kitti_raw)");
   }
   // Stereo GCPs search the label range before their own GCPs exist: it comes from the
-  // configuration, the other sources' GCPs or the views' overlap then.
+  // configuration, the other sources' GCPs, the pair's matched disparities or the views' overlap
+  // then.
   const internal::ProvisionalLabels provisional = [&](const GcpSet& other_gcps) {
-    return cost::MakeLabelSpace(kind, options.labels.count, options.labels.min, options.labels.max,
-                                other_gcps, reference, dataset.neighbors,
-                                dataset.disparity_numerator, options.label_range);
+    return cost::MakeLabelSpace(
+        kind, options.labels.count, options.labels.min, options.labels.max, other_gcps, reference,
+        dataset.neighbors, dataset.disparity_numerator, dataset.rectified, options.label_range);
   };
   internal::GcpStageResult gcp_stage = internal::RunGcpStage(options, dataset, provisional);
   const GcpSet& gcps = gcp_stage.gcps;
@@ -368,9 +369,10 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
   gcp_clock.Done({{"count", gcps.size()}});
 
   cost::LabelRangeSummary range_summary;
-  const LabelSpace labels = cost::MakeLabelSpace(
-      kind, options.labels.count, options.labels.min, options.labels.max, gcps, reference,
-      dataset.neighbors, dataset.disparity_numerator, options.label_range, &range_summary);
+  const LabelSpace labels =
+      cost::MakeLabelSpace(kind, options.labels.count, options.labels.min, options.labels.max, gcps,
+                           reference, dataset.neighbors, dataset.disparity_numerator,
+                           dataset.rectified, options.label_range, &range_summary);
   report["labels"] = {{"space", LabelSpaceKindName(labels.kind())},
                       {"count", labels.count()},
                       {"min", labels.min()},

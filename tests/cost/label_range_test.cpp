@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
 
 #include "gcpstereo/core/error.h"
 #include "synthetic_scene.h"
@@ -128,36 +129,56 @@ TEST(LabelRange, MakeLabelSpaceFillsMissingBounds) {
       View{"n", cv::Mat(), RectifiedSequenceCamera(100, 32, 4, 0.3, 1, 65, 9)}};
   LabelRangeSummary summary;
   // Configured range: taken as is.
-  LabelSpace s =
-      MakeLabelSpace(LabelSpaceKind::kDepth, 10, 1.0, 5.0, GcpSet{}, ref, nbs, 0.0, {}, &summary);
+  LabelSpace s = MakeLabelSpace(LabelSpaceKind::kDepth, 10, 1.0, 5.0, GcpSet{}, ref, nbs, 0.0,
+                                false, {}, &summary);
   EXPECT_EQ(summary.source, "config");
   EXPECT_EQ(s.min(), 1.0);
   EXPECT_EQ(s.max(), 5.0);
-  // From GCPs, in disparity (numerator 30): depth [2/1.1, 4·1.1] → disparity [30/4.4, 30·1.1/2].
+  // From GCPs, in disparity (numerator 30): depth [2/1.1, 4·1.1] → disparity [0, 30·1.1/2] (the
+  // automatic minimum of disparity labels is 0).
   LabelRangeOptions options;
   options.gcp_low_percentile = 0;
   options.gcp_high_percentile = 100;
   s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt,
-                     Gcps({2.0, 3.0, 4.0}), ref, nbs, 30.0, options, &summary);
+                     Gcps({2.0, 3.0, 4.0}), ref, nbs, 30.0, false, options, &summary);
   EXPECT_EQ(summary.source, "gcps");
-  EXPECT_NEAR(s.min(), 30.0 / 4.4, 1e-9);
+  EXPECT_EQ(s.min(), 0.0);
   EXPECT_NEAR(s.max(), 30.0 * 1.1 / 2.0, 1e-9);
+  EXPECT_EQ(s.count(), 16);
+  // Without a count: one label per pixel, the automatic bound rounded up (16.5 → 17).
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, std::nullopt, std::nullopt, std::nullopt,
+                     Gcps({2.0, 3.0, 4.0}), ref, nbs, 30.0, false, options, &summary);
+  EXPECT_EQ(s.min(), 0.0);
+  EXPECT_EQ(s.max(), 17.0);
+  EXPECT_EQ(s.count(), 18);
+  EXPECT_EQ(s.step(), 1.0);
+  // … and from given bounds, steps of at most one pixel.
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, std::nullopt, 2.0, 12.5, GcpSet{}, ref, nbs, 30.0,
+                     false);
+  EXPECT_EQ(s.count(), 12);
+  EXPECT_LE(s.step(), 1.0);
+  EXPECT_EQ(ErrorOf([&] {
+              MakeLabelSpace(LabelSpaceKind::kDepth, std::nullopt, 1.0, 5.0, GcpSet{}, ref, nbs,
+                             0.0, false);
+            }),
+            "labels.count = auto. Violated constraint: one label per pixel of disparity needs "
+            "labels.space disparity");
   // Min from the config, max from the GCPs (inverse depth).
   s = MakeLabelSpace(LabelSpaceKind::kInverseDepth, 16, 0.1, std::nullopt, Gcps({2.0, 4.0}), ref,
-                     nbs, 0.0, options, &summary);
+                     nbs, 0.0, false, options, &summary);
   EXPECT_EQ(summary.source, "config+gcps");
   EXPECT_EQ(s.min(), 0.1);
   EXPECT_NEAR(s.max(), 1.1 / 2.0, 1e-9);
   // From the frustum: inverse depth down to 0 (unbounded far).
   s = MakeLabelSpace(LabelSpaceKind::kInverseDepth, 16, std::nullopt, std::nullopt, GcpSet{}, ref,
-                     nbs, 0.0, {}, &summary);
+                     nbs, 0.0, false, {}, &summary);
   EXPECT_EQ(summary.source, "frustum");
   EXPECT_EQ(s.min(), 0.0);
   EXPECT_NEAR(s.max(), 64.5 / 30.0, 1e-9);
   // Depth labels cannot be unbounded.
   EXPECT_EQ(ErrorOf([&] {
               MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, GcpSet{}, ref,
-                             nbs, 0.0);
+                             nbs, 0.0, false);
             }),
             "labels.max = auto. Violated constraint: automatic depth range [0.465116, inf] from "
             "the neighbours' frustum overlap is unbounded; set labels.max or "
@@ -165,9 +186,90 @@ TEST(LabelRange, MakeLabelSpaceFillsMissingBounds) {
   options = {};
   options.max_depth = 20.0;
   s = MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, GcpSet{}, ref, nbs,
-                     0.0, options);
+                     0.0, false, options);
   EXPECT_NEAR(s.min(), 30.0 / 64.5, 1e-9);
   EXPECT_EQ(s.max(), 20.0);
+}
+
+// A rectified pair of random texture: the background at disparity `far_px`, a square at `near_px`
+// (left x − right x), `width` × 120 pixels.
+std::pair<cv::Mat, cv::Mat> ShiftedPair(int width, int far_px, int near_px) {
+  cv::RNG rng(7);
+  cv::Mat texture(120, width + near_px, CV_8UC3), square(60, 60 + near_px, CV_8UC3);
+  rng.fill(texture, cv::RNG::UNIFORM, 0, 256);
+  rng.fill(square, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat left = texture.colRange(0, width).clone();
+  cv::Mat right(120, width, CV_8UC3);
+  // right(x) = left(x + d): the right image sees each point d pixels further left.
+  texture.colRange(far_px, far_px + width).copyTo(right);
+  square.colRange(0, 60).copyTo(left(cv::Rect(width / 2, 30, 60, 60)));
+  square.colRange(0, 60).copyTo(right(cv::Rect(width / 2 - near_px, 30, 60, 60)));
+  return {left, right};
+}
+
+TEST(LabelRange, MatchedDisparitiesOfARectifiedPair) {
+  // Background at 6 px, a square at 40 px; the search covers every disparity below the width.
+  for (const int width : {120, 320}) {  // full resolution, and halved above 200 px
+    const auto [left, right] = ShiftedPair(width, 6, 40);
+    const auto range = DisparityRangeFromMatching(left, right);
+    ASSERT_TRUE(range.has_value()) << width;
+    EXPECT_NEAR(range->first, 6.0, 2.0) << width;
+    EXPECT_NEAR(range->second, 40.0, 2.0) << width;
+  }
+  // Nothing to match on a textureless pair.
+  const cv::Mat flat(120, 320, CV_8UC3, cv::Scalar(90, 90, 90));
+  EXPECT_FALSE(DisparityRangeFromMatching(flat, flat).has_value());
+  EXPECT_EQ(ErrorOf([&] { DisparityRangeFromMatching(flat, flat.colRange(0, 300).clone()); }),
+            "DisparityRangeFromMatching: the images must be non-empty 8-bit grey or BGR images of "
+            "one size and type");
+}
+
+TEST(LabelRange, RectifiedPairRangeSpansMatchesAndGcps) {
+  const auto [left, right] = ShiftedPair(320, 6, 40);
+  // f = 100, baseline 0.3 per view: disparity = 30 / depth.
+  const View ref{"r", left, RectifiedSequenceCamera(100, 160, 60, 0.3, 0, 320, 120)};
+  const std::vector<View> nbs = {
+      View{"n", right, RectifiedSequenceCamera(100, 160, 60, 0.3, 1, 320, 120)}};
+  LabelRangeSummary summary;
+  const auto matched = DisparityRangeFromMatching(left, right);
+  ASSERT_TRUE(matched.has_value());
+  // No GCPs: the matched disparities, widened by the margin (0.1).
+  LabelSpace s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt,
+                                GcpSet{}, ref, nbs, 30.0, true, {}, &summary);
+  EXPECT_EQ(summary.source, "matching");
+  EXPECT_EQ(s.min(), 0.0);
+  EXPECT_NEAR(s.max(), matched->second * 1.1, 1e-9);
+  // In depth: the far end from the matched background.
+  s = MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, GcpSet{}, ref, nbs,
+                     30.0, true, {}, &summary);
+  EXPECT_NEAR(s.min(), 30.0 / matched->second / 1.1, 1e-9);
+  EXPECT_NEAR(s.max(), 30.0 / matched->first * 1.1, 1e-9);
+  // GCPs only on the background (depth 5 = disparity 6): the square's disparities still count…
+  LabelRangeOptions options;
+  options.gcp_low_percentile = 0;
+  options.gcp_high_percentile = 100;
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt, Gcps({5.0, 5.0}),
+                     ref, nbs, 30.0, true, options, &summary);
+  EXPECT_EQ(summary.source, "gcps+matching");
+  EXPECT_NEAR(s.max(), matched->second * 1.1, 1e-9);
+  // In depth, the far end stays the GCPs' (depth 3, disparity 10; the background is at depth 5).
+  s = MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, Gcps({2.0, 3.0}), ref,
+                     nbs, 30.0, true, options, &summary);
+  EXPECT_EQ(summary.source, "gcps+matching");
+  EXPECT_NEAR(s.min(), 30.0 / matched->second / 1.1, 1e-9);
+  EXPECT_NEAR(s.max(), 3.0 * 1.1, 1e-9);
+  // … and a GCP nearer than anything matched widens the range beyond the matches.
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt, Gcps({5.0, 0.5}),
+                     ref, nbs, 30.0, true, options, &summary);
+  EXPECT_NEAR(s.max(), 60.0 * 1.1, 1e-9);
+  // A textureless pair falls back to the GCPs.
+  const cv::Mat flat(120, 320, CV_8UC3, cv::Scalar(90, 90, 90));
+  const View flat_ref{"r", flat, ref.camera};
+  const std::vector<View> flat_nbs = {View{"n", flat, nbs[0].camera}};
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt, Gcps({5.0, 2.0}),
+                     flat_ref, flat_nbs, 30.0, true, options, &summary);
+  EXPECT_EQ(summary.source, "gcps");
+  EXPECT_NEAR(s.max(), 15.0 * 1.1, 1e-9);
 }
 
 }  // namespace

@@ -320,10 +320,11 @@ double Bad1(const nlohmann::json& report, const char* mask) {
   return report["metrics"]["middlebury"]["result"][mask]["bad_percent"][1].get<double>();
 }
 
-// labels.min/max omitted on a rectified pair with stereo GCPs: the views' overlap allows every
-// disparity up to the image width, and the matches are searched up to width - 1 (the search
-// rejected the width itself before); the labels then come from the GCPs. Half-size tsukuba and
-// a small adaptive-weight window keep it fast.
+// labels.min/max/count omitted on a rectified pair with stereo GCPs: the pair's matched
+// disparities (OpenCV's semi-global matcher over every disparity below the width) bound the
+// stereo GCPs' search and, with the GCPs, the labels: one per pixel from 0 up. The matches alone
+// miss tsukuba's nearest surfaces (the lamp), which the range must still reach. Half-size tsukuba
+// and a small adaptive-weight window keep it fast.
 TEST(MiddleburyRun, AutomaticLabelRangeOfARectifiedPair) {
   GCPSTEREO_REQUIRE_SHARED_DATA(tsukuba, "middlebury/tsukuba");
   const std::string dir = testing::MakeTempDir("gcpstereo-auto");
@@ -331,13 +332,17 @@ TEST(MiddleburyRun, AutomaticLabelRangeOfARectifiedPair) {
       RunShippedConfig("middlebury_stereo.yaml", dir + "/out",
                        {"dataset.path=" + tsukuba, "dataset.reference=scene1.row3.col3",
                         "dataset.neighbors=[scene1.row3.col4]", "dataset.scale=0.5",
-                        "labels.min=auto", "labels.max=auto", "labels.count=16"},
+                        "labels.min=auto", "labels.max=auto", "labels.count=auto"},
                        {"gcp.stereo.aw_window_px=9", "output.previews=false", "output.mesh=false"});
-  EXPECT_EQ(report["labels"]["range_source"], "gcps");
+  const nlohmann::json& labels = report["labels"];
+  EXPECT_EQ(labels["range_source"], "gcps+matching");
   // Half-size tsukuba's disparities are 2.5…7 (the ground truth's 5…14 halved).
-  EXPECT_GT(report["labels"]["min"].get<double>(), 0.5);
-  EXPECT_LT(report["labels"]["max"].get<double>(), 12.0);
-  EXPECT_GT(report["labels"]["max"].get<double>(), 6.0);
+  EXPECT_EQ(labels["min"].get<double>(), 0.0);
+  EXPECT_GE(labels["max"].get<double>(), 7.0);
+  EXPECT_LE(labels["max"].get<double>(), 10.0);
+  EXPECT_EQ(labels["step"].get<double>(), 1.0);
+  EXPECT_EQ(labels["count"].get<int>(), labels["max"].get<int>() + 1);
+  EXPECT_EQ(labels["gcps_outside_range"].get<int>(), 0);
 }
 
 // On tsukuba, the check fills the half-occluded bands left of the foreground objects with

@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "cost_internal.h"
 #include "gcpstereo/core/error.h"
@@ -158,20 +161,99 @@ std::pair<double, double> DepthRangeFromFrustumOverlap(const View& reference,
   return {near, std::min(far, options.max_depth)};
 }
 
-LabelSpace MakeLabelSpace(LabelSpaceKind kind, int count, std::optional<double> min,
+std::optional<std::pair<double, double>> DisparityRangeFromMatching(const cv::Mat& left,
+                                                                    const cv::Mat& right) {
+  if (left.empty() || left.size() != right.size() || left.type() != right.type() ||
+      left.depth() != CV_8U || (left.channels() != 1 && left.channels() != 3)) {
+    throw Error(
+        "DisparityRangeFromMatching: the images must be non-empty 8-bit grey or BGR "
+        "images of one size and type");
+  }
+  // Half resolution: the range needs no sub-pixel precision, and small mismatched regions merge
+  // into their surroundings.
+  const double scale = left.cols >= 200 ? 0.5 : 1.0;
+  cv::Mat l = left, r = right;
+  if (scale != 1.0) {
+    cv::resize(left, l, cv::Size(), scale, scale, cv::INTER_AREA);
+    cv::resize(right, r, cv::Size(), scale, scale, cv::INTER_AREA);
+  }
+  // Every disparity below the width (the matcher wants a multiple of 16). The matcher leaves the
+  // first `search` columns unmatched, so both images get that many replicated columns on the left.
+  const int search = (l.cols + 15) / 16 * 16;
+  cv::Mat left_padded, right_padded;
+  cv::copyMakeBorder(l, left_padded, 0, 0, search, 0, cv::BORDER_REPLICATE);
+  cv::copyMakeBorder(r, right_padded, 0, 0, search, 0, cv::BORDER_REPLICATE);
+  constexpr int kBlock = 5;
+  const int area = kBlock * kBlock * l.channels();
+  const int speckle_px = std::max(1, static_cast<int>(0.005 * static_cast<double>(l.total())));
+  const cv::Ptr<cv::StereoSGBM> matcher = cv::StereoSGBM::create(
+      /*minDisparity=*/0, search, kBlock, /*P1=*/8 * area, /*P2=*/32 * area,
+      /*disp12MaxDiff=*/1, /*preFilterCap=*/0, /*uniquenessRatio=*/10, speckle_px,
+      /*speckleRange=*/1, cv::StereoSGBM::MODE_SGBM);
+  cv::Mat fixed_point;  // CV_16S, disparity · 16, negative = no match
+  matcher->compute(left_padded, right_padded, fixed_point);
+  const cv::Mat disparity16 = fixed_point.colRange(search, fixed_point.cols);
+  // A block without texture matches every disparity at the same cost, and the matcher's
+  // uniqueness test does not reject exact ties: such pixels are not counted.
+  cv::Mat grey, mean, mean_of_squares;
+  if (l.channels() == 3) {
+    cv::cvtColor(l, grey, cv::COLOR_BGR2GRAY);
+  } else {
+    grey = l;
+  }
+  grey.convertTo(grey, CV_32F);
+  cv::boxFilter(grey, mean, CV_32F, cv::Size(kBlock, kBlock));
+  cv::boxFilter(grey.mul(grey), mean_of_squares, CV_32F, cv::Size(kBlock, kBlock));
+  int lowest = std::numeric_limits<int>::max(), highest = -1;
+  for (int y = 0; y < disparity16.rows; ++y) {
+    const auto* row = disparity16.ptr<std::int16_t>(y);
+    const float* m = mean.ptr<float>(y);
+    const float* m2 = mean_of_squares.ptr<float>(y);
+    for (int x = 0; x < disparity16.cols; ++x) {
+      if (row[x] < 0 || m2[x] - m[x] * m[x] < 1.0f) continue;  // grey-level variance < 1
+      lowest = std::min<int>(lowest, row[x]);
+      highest = std::max<int>(highest, row[x]);
+    }
+  }
+  if (highest < 0) return std::nullopt;
+  return std::make_pair(lowest / 16.0 / scale, highest / 16.0 / scale);
+}
+
+LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::optional<double> min,
                           std::optional<double> max, const GcpSet& gcps, const View& reference,
                           const std::vector<View>& neighbors, double disparity_numerator,
-                          const LabelRangeOptions& options, LabelRangeSummary* summary) {
+                          bool rectified_pair, const LabelRangeOptions& options,
+                          LabelRangeSummary* summary) {
   LabelRangeSummary info;
   info.source = "config";
   if (!min || !max) {
     options.Check();
     std::pair<double, double> depth_range;
     std::string source;
+    // The pair's disparities d = f·B / depth, B the baseline to the first neighbour.
+    const double pair_numerator =
+        rectified_pair && !neighbors.empty()
+            ? reference.camera.K(0, 0) *
+                  (neighbors.front().camera.center_world.x() - reference.camera.center_world.x())
+            : 0.0;
+    const std::optional<std::pair<double, double>> matched =
+        pair_numerator > 0.0 ? DisparityRangeFromMatching(reference.image, neighbors.front().image)
+                             : std::nullopt;
+    const double matched_near =
+        matched ? pair_numerator / matched->second / (1.0 + options.margin) : kInf;
     if (!gcps.empty()) {
       depth_range = DepthRangeFromGcps(gcps, options.gcp_low_percentile,
                                        options.gcp_high_percentile, options.margin);
       source = "gcps";
+      if (matched) {  // the near end only: the matcher's far end is often the sky (disparity 0)
+        depth_range.first = std::min(depth_range.first, matched_near);
+        source = "gcps+matching";
+      }
+    } else if (matched) {
+      depth_range = {matched_near, matched->first > 0.0
+                                       ? pair_numerator / matched->first * (1.0 + options.margin)
+                                       : kInf};
+      source = "matching";
     } else {
       depth_range = DepthRangeFromFrustumOverlap(reference, neighbors, options);
       source = "frustum";
@@ -195,9 +277,13 @@ LabelSpace MakeLabelSpace(LabelSpaceKind kind, int count, std::optional<double> 
         auto_max = disparity_numerator / z_min;
         break;
     }
-    const std::string range_text = "automatic depth range [" + internal::Str(z_min) + ", " +
-                                   internal::Str(z_max) + "] from the " +
-                                   (source == "gcps" ? "GCPs" : "neighbours' frustum overlap");
+    const std::string range_text =
+        "automatic depth range [" + internal::Str(z_min) + ", " + internal::Str(z_max) +
+        "] from the " +
+        (source == "gcps"       ? "GCPs"
+         : source == "matching" ? "pair's matched disparities"
+         : source == "frustum"  ? "neighbours' frustum overlap"
+                                : "GCPs and the pair's matched disparities");
     if (!max && kind == LabelSpaceKind::kDepth && !std::isfinite(z_max)) {
       throw ConfigError(ViolatedConstraint(
           "labels.max", "auto",
@@ -210,11 +296,22 @@ LabelSpace MakeLabelSpace(LabelSpaceKind kind, int count, std::optional<double> 
           range_text + " reaches depth 0 (the reference centre is inside a neighbour's frustum); "
                        "set labels.min/labels.max"));
     }
+    if (kind == LabelSpaceKind::kDisparity) {
+      auto_min = 0.0;
+      if (!count) auto_max = std::ceil(auto_max);
+    }
     if (!min) min = auto_min;
     if (!max) max = auto_max;
   }
+  if (!count) {
+    if (kind != LabelSpaceKind::kDisparity) {
+      throw ConfigError(ViolatedConstraint(
+          "labels.count", "auto", "one label per pixel of disparity needs labels.space disparity"));
+    }
+    count = std::max(2, static_cast<int>(std::ceil(*max - *min - 1e-9)) + 1);
+  }
   if (summary != nullptr) *summary = info;
-  return LabelSpace(kind, count, *min, *max, disparity_numerator);
+  return LabelSpace(kind, *count, *min, *max, disparity_numerator);
 }
 
 }  // namespace gcpstereo::cost

@@ -34,8 +34,10 @@ struct DatasetOptions {
 // Keys of the `labels:` section.
 struct LabelOptions {
   std::string space = "depth";  // depth | inverse_depth | disparity
-  int count = 360;              // number of discrete hypotheses (the paper: 360 depth levels)
-  std::optional<double> min;    // in the space's unit; absent = automatic
+  // Number of discrete hypotheses (the paper: 360 depth levels); absent = one per disparity pixel
+  // (labels.space disparity only).
+  std::optional<int> count = 360;
+  std::optional<double> min;  // in the space's unit; absent = automatic
   std::optional<double> max;
 };
 
