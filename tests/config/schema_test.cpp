@@ -150,6 +150,69 @@ TEST_F(SchemaTest, SyntaxErrorNamesLine) {
             "test.yaml:3: YAML syntax error: end of sequence flow not found");
 }
 
+// yaml-cpp runs a quoted scalar whose closing quote is missing on over the following lines (to
+// the next quote of its kind or the end), which swallowed later keys silently or gave a syntax
+// error lines further down. Such a scalar is refused on the line it starts, naming the key.
+TEST_F(SchemaTest, UnclosedQuoteNamesItsLineAndKey) {
+  // Runs on to the end: dataset.path would be "/data/x labels: count: 3 ".
+  EXPECT_EQ(ErrorOf("dataset:\n  path: \"/data/x\nlabels:\n  count: 3\n"),
+            "test.yaml:2: the quoted value of dataset.path is not closed on its line (missing "
+            "closing \")");
+  // Closed by a later quote, then a syntax error on line 4.
+  EXPECT_EQ(ErrorOf("labels:\n  count: 3\ndataset:\n  path: '/data/x\nlabels:\n  space: 'depth'\n"),
+            "test.yaml:4: the quoted value of dataset.path is not closed on its line (missing "
+            "closing ')");
+  // The end of the text without a newline.
+  EXPECT_EQ(ErrorOf("dataset:\n  path: \"/data/x"),
+            "test.yaml:2: the quoted value of dataset.path is not closed on its line (missing "
+            "closing \")");
+  // An item of a flow list, an escaped quote that does not close, a key (yaml-cpp reads the
+  // run-on text as the value of labels), a top-level key.
+  EXPECT_EQ(ErrorOf("gcp:\n  sources: [\"stereo\", \"lidar]\n"),
+            "test.yaml:2: the quoted value of gcp.sources is not closed on its line (missing "
+            "closing \")");
+  EXPECT_EQ(ErrorOf("dataset:\n  path: \"a\\\"\nlabels:\n  space: \"depth\"\n"),
+            "test.yaml:2: the quoted value of dataset.path is not closed on its line (missing "
+            "closing \")");
+  EXPECT_EQ(
+      ErrorOf("labels:\n  'count: 3\n"),
+      "test.yaml:2: the quoted value of labels is not closed on its line (missing closing ')");
+  EXPECT_EQ(ErrorOf("\"labels:\n  count: 3\n"),
+            "test.yaml:1: a quoted string is not closed on its line (missing closing \")");
+  EXPECT_EQ(o.path, "");  // nothing was applied
+  try {
+    schema.ApplyOverride("dataset.path=\"/data/x");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(),
+                 "--set dataset.path=\"/data/x: the quoted value of dataset.path is not closed on "
+                 "its line (missing closing \")");
+  }
+}
+
+// Quoted scalars that end on their line load as before: '#' inside quotes, escaped quotes, flow
+// lists of quoted items (also over two lines), tags, quoted keys, CRLF line ends.
+TEST_F(SchemaTest, QuotedValuesClosedOnTheirLineLoad) {
+  schema.LoadString("dataset:\n  path: \"/data/x # not a comment\"  # it's a comment\n", "t");
+  EXPECT_EQ(o.path, "/data/x # not a comment");
+  schema.LoadString("dataset:\n  path: \"a\\\"b\"\n", "t");
+  EXPECT_EQ(o.path, "a\"b");
+  schema.LoadString("dataset:\n  path: 'it''s'\n", "t");
+  EXPECT_EQ(o.path, "it's");
+  schema.LoadString("gcp:\n  sources: [ \"stereo\", 'lidar' ]\n", "t");
+  EXPECT_EQ(o.sources, (std::vector<std::string>{"stereo", "lidar"}));
+  schema.LoadString("gcp:\n  sources: [\"depth_map\",\n            'stereo']\n", "t");
+  EXPECT_EQ(o.sources, (std::vector<std::string>{"depth_map", "stereo"}));
+  schema.LoadString("\"labels\":\n  'space': !!str \"inverse_depth\"\n", "t");
+  EXPECT_EQ(o.space, "inverse_depth");
+  schema.LoadString("dataset:\r\n  path: \"/data/y\"\r\n", "t");
+  EXPECT_EQ(o.path, "/data/y");
+  schema.ApplyOverride("dataset.path=\"/data/a b\"");
+  EXPECT_EQ(o.path, "/data/a b");
+  schema.ApplyOverride("gcp.sources=['lidar', \"stereo\"]");
+  EXPECT_EQ(o.sources, (std::vector<std::string>{"lidar", "stereo"}));
+}
+
 TEST_F(SchemaTest, OverridesParseYamlValues) {
   schema.ApplyOverride("gcp.sources=[stereo]");
   EXPECT_EQ(o.sources, (std::vector<std::string>{"stereo"}));

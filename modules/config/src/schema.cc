@@ -9,10 +9,12 @@
 #include <functional>
 #include <iomanip>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <variant>
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include "gcpstereo/core/error.h"
@@ -371,9 +373,143 @@ struct Walker {
   }
 };
 
+// yaml-cpp (0.7) lets a quoted scalar whose closing quote is missing run on over the lines that
+// follow, up to the next quote of its kind or the end of the text: `reference: "0005` swallows
+// every later key, and the user reads a misleading error (dataset.reference is required, a view
+// name of five lines, a syntax error further down) or none at all. Our configurations never need
+// a quoted scalar over several lines, so one (key or value) whose closing quote is not on the line
+// where it starts is refused here, naming that line and the key. The text is read event by event:
+// the scalar's event comes before any syntax error its folding causes further down, so it is found
+// then too; a syntax error before it is left to YAML::Load, which reports it.
+struct UnclosedQuote {
+  int line = 0;     // 0-based, as YAML::Mark
+  std::string key;  // the dotted key of the value, or of the section of a key ("" at the top)
+  char quote = '"';
+
+  // Keys are not told apart from values: yaml-cpp may take a run-on scalar for either (in a flow
+  // list it makes "lidar] …" the key of a one-pair map), and the section names the place anyway.
+  std::string Describe() const {
+    return (key.empty() ? std::string("a quoted string") : "the quoted value of " + key) +
+           " is not closed on its line (missing closing " + quote + ")";
+  }
+};
+
+class UnclosedQuoteFinder : public YAML::EventHandler {
+ public:
+  // `key` prefixes the keys found (the key of a --set value; "" for a file).
+  UnclosedQuoteFinder(const std::string& text, std::string key) : prefix_(std::move(key)) {
+    // yaml-cpp's marks count from after a UTF-8 byte-order mark, in bytes.
+    std::stringstream in(text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? text.substr(3) : text);
+    for (std::string line; std::getline(in, line);) lines_.push_back(line);
+  }
+
+  const std::optional<UnclosedQuote>& found() const { return found_; }
+
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override { NodeDone(nullptr); }
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override { NodeDone(nullptr); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                const std::string& value) override {
+    char quote = 0;
+    if (!found_ && !EndsOnItsLine(mark, &quote)) {
+      found_ = UnclosedQuote{mark.line, KeyHere(), quote};
+    }
+    NodeDone(&value);
+  }
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {
+    stack_.push_back({false, KeyHere()});
+  }
+  void OnSequenceEnd() override { EndCollection(); }
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {
+    stack_.push_back({true, KeyHere()});
+  }
+  void OnMapEnd() override { EndCollection(); }
+
+ private:
+  struct Collection {
+    bool is_map;
+    std::string key;     // dotted key of the collection
+    bool at_key = true;  // maps: the next node is a key (else the value of `last_key`)
+    std::string last_key;
+  };
+
+  // The dotted key the next node belongs to (a list item: the list's key).
+  std::string KeyHere() const {
+    if (stack_.empty()) return prefix_;
+    const Collection& c = stack_.back();
+    if (!c.is_map || c.at_key) return c.key;  // a list item, a key
+    return c.key.empty() ? c.last_key : c.key + "." + c.last_key;
+  }
+
+  void NodeDone(const std::string* scalar) {
+    if (stack_.empty() || !stack_.back().is_map) return;
+    Collection& c = stack_.back();
+    if (c.at_key) c.last_key = scalar ? *scalar : "?";
+    c.at_key = !c.at_key;
+  }
+
+  void EndCollection() {
+    stack_.pop_back();
+    NodeDone(nullptr);
+  }
+
+  // Whether the scalar starting at `mark` closes on that line. Plain and block scalars (and
+  // a tag or anchor alone on its line) do not start with a quote there and count as closed.
+  // `quote` receives the quote character.
+  bool EndsOnItsLine(const YAML::Mark& mark, char* quote) const {
+    if (mark.line < 0 || mark.line >= static_cast<int>(lines_.size())) return true;
+    const std::string& line = lines_[mark.line];
+    size_t i = static_cast<size_t>(std::max(mark.column, 0));
+    // The node's mark is at its properties (`!!str "x"`, `&a 'x'`) when it has some.
+    while (i < line.size() && (line[i] == '!' || line[i] == '&')) {
+      while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+    }
+    if (i >= line.size() || (line[i] != '"' && line[i] != '\'')) return true;
+    *quote = line[i];
+    for (++i; i < line.size(); ++i) {
+      if (*quote == '"' && line[i] == '\\') {
+        ++i;  // an escape: \" is not the end (a \ at the line's end continues the scalar)
+      } else if (*quote == '\'' && line[i] == '\'' && i + 1 < line.size() && line[i + 1] == '\'') {
+        ++i;  // '' is a quote inside single quotes
+      } else if (line[i] == *quote) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  std::string prefix_;
+  std::vector<std::string> lines_;
+  std::vector<Collection> stack_;
+  std::optional<UnclosedQuote> found_;
+};
+
+std::optional<UnclosedQuote> FindUnclosedQuote(const std::string& yaml_text,
+                                               const std::string& key) {
+  UnclosedQuoteFinder finder(yaml_text, key);
+  // yaml-cpp fails at "illegal EOF in scalar" (no mark of the scalar) when the text ends inside the
+  // quotes without a newline; with one it reports the run-on scalar.
+  std::stringstream in(yaml_text + "\n");
+  try {
+    YAML::Parser parser(in);
+    parser.HandleNextDocument(finder);
+  } catch (const YAML::Exception&) {
+    // A syntax error: reported by YAML::Load, unless a run-on quoted scalar came first.
+  }
+  return finder.found();
+}
+
 }  // namespace
 
 void Schema::LoadString(const std::string& yaml_text, const std::string& source) {
+  if (const std::optional<UnclosedQuote> unclosed = FindUnclosedQuote(yaml_text, "")) {
+    throw ConfigError(source + ":" + std::to_string(unclosed->line + 1) + ": " +
+                      unclosed->Describe());
+  }
   YAML::Node root;
   try {
     root = YAML::Load(yaml_text);
@@ -406,6 +542,11 @@ void Schema::ApplyOverride(const std::string& assignment) {
   if (it == by_key_.end()) {
     throw ConfigError("--set " + assignment + ": unknown configuration key '" + key + "'" +
                       Walker{by_key_, key}.Suggestion(key));
+  }
+  // A --set value is one line as a rule; one whose quote does not close there is refused as in a
+  // file (LoadString).
+  if (const std::optional<UnclosedQuote> unclosed = FindUnclosedQuote(value_text, key)) {
+    throw ConfigError("--set " + assignment + ": " + unclosed->Describe());
   }
   YAML::Node value;
   try {

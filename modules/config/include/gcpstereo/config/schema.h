@@ -50,7 +50,9 @@ struct KeyDoc {
 // Each key ("optimizer.lambda_s") is registered with a pointer to the field it sets, its valid
 // range or choices and its documentation; the field's current value is its default. Loading a YAML
 // file walks the document: an unknown key, a value of the wrong type or out of range throws a
-// ConfigError "<file>:<line>: <key> = <value>. Violated constraint: <bound>". `--set KEY=VALUE`
+// ConfigError "<file>:<line>: <key> = <value>. Violated constraint: <bound>"; a quoted scalar that
+// does not close on the line where it starts (multi-line quoted scalars are refused) throws
+// "<file>:<line>: the quoted value of <key> is not closed on its line …". `--set KEY=VALUE`
 // overrides go through the same checks. The schema then writes the effective configuration.
 class Schema {
  public:
