@@ -27,6 +27,15 @@ std::string OneLine(std::string s) {
   return s;
 }
 
+// The -o/--output of run, synth and demo. An empty path ("-o ''", an unset shell variable) is no
+// folder: run failed with ": cannot create output folder: Invalid argument", and synth and demo
+// wrote their files into the working folder. "." names that folder when it is meant.
+const CLI::Validator kOutputFolder(
+    [](std::string& path) {
+      return path.empty() ? std::string("the output folder path is empty") : std::string();
+    },
+    "");
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -51,7 +60,8 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   run->add_option("-o,--output", run_args.output_dir, "output folder (created if missing)")
-      ->required();
+      ->required()
+      ->check(kOutputFolder);
   run->add_option("--set", run_args.overrides,
                   "override one dotted key, KEY=VALUE with VALUE parsed as YAML "
                   "(e.g. --set dataset.neighbors=[im1,im3]); repeatable");
@@ -69,7 +79,9 @@ int main(int argc, char** argv) {
                    "(11 views, 1536x1024)")
       ->required()
       ->check(CLI::IsMember({"tiny", "small", "fountain"}));
-  synth->add_option("-o,--output", synth_args.output_dir, "output folder")->required();
+  synth->add_option("-o,--output", synth_args.output_dir, "output folder")
+      ->required()
+      ->check(kOutputFolder);
   synth->add_option("--seed", synth_args.seed, "random seed (same seed, same bytes)")
       ->capture_default_str()
       ->check(CLI::Validator(
@@ -91,7 +103,9 @@ int main(int argc, char** argv) {
   CLI::App* demo = app.add_subcommand(
       "demo",
       "generate the synthetic small scene and run the full pipeline on it, with evaluation");
-  demo->add_option("-o,--output", demo_args.output_dir, "output folder")->capture_default_str();
+  demo->add_option("-o,--output", demo_args.output_dir, "output folder")
+      ->capture_default_str()
+      ->check(kOutputFolder);
 
   CLI::App* keys = app.add_subcommand("keys",
                                       "list every configuration key with its default, "

@@ -20,6 +20,9 @@ namespace fs = std::filesystem;
 namespace gcpstereo::pipeline {
 
 OutputFolder::OutputFolder(const std::string& final_dir) : final_dir_(final_dir) {
+  // "" is no folder (std::filesystem says "Invalid argument", and relative names would land in the
+  // working folder); the command line names its option for it before getting here.
+  if (final_dir.empty()) throw Error("the output folder path is empty");
   std::error_code ec;
   if (fs::exists(final_dir, ec) && !fs::is_directory(final_dir, ec)) {
     throw IoError(final_dir, "output path exists and is not a folder");

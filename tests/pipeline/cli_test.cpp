@@ -22,10 +22,13 @@ struct Result {
   std::string output;  // stdout and stderr, or stderr only
 };
 
-// Runs `args` through the shell; captures stderr (and stdout when `with_stdout`).
-Result RunCli(const std::string& args, bool with_stdout = false) {
-  const std::string command =
-      std::string(GCPSTEREO_EXECUTABLE) + " " + args + (with_stdout ? " 2>&1" : " 2>&1 >/dev/null");
+// Runs `args` through the shell (in the folder `working_dir` when given); captures stderr (and
+// stdout when `with_stdout`).
+Result RunCli(const std::string& args, bool with_stdout = false,
+              const std::string& working_dir = "") {
+  const std::string command = (working_dir.empty() ? "" : "cd '" + working_dir + "' && ") +
+                              std::string(GCPSTEREO_EXECUTABLE) + " " + args +
+                              (with_stdout ? " 2>&1" : " 2>&1 >/dev/null");
   Result r;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return r;
@@ -92,6 +95,27 @@ TEST(Cli, BadCommandLineIsOneLine) {
     EXPECT_NE(r.status, 0) << args;
     EXPECT_EQ(r.output.rfind("gcpstereo: error: ", 0), 0u) << r.output;
     EXPECT_EQ(r.output.find('\n'), r.output.size() - 1) << r.output;
+  }
+}
+
+// -o '' (an empty variable in a script) is no folder: run failed with ": cannot create output
+// folder: Invalid argument", synth and demo wrote into the working folder. One line naming the
+// option, and nothing is created.
+TEST(Cli, EmptyOutputPathIsOneLineNamingTheOption) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli");
+  const std::string config = WriteFile(dir / "ok.yaml", "dataset:\n  path: /x\n  reference: a\n");
+  const fs::path work = dir / "work";
+  fs::create_directories(work);
+  for (const std::string& args :
+       {"run " + config + " -o ''", std::string("synth --preset tiny -o ''"),
+        std::string("demo -o ''")}) {
+    const Result r = RunCli(args, false, work.string());
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_EQ(r.output,
+              "gcpstereo: error: --output: the output folder path is empty (gcpstereo --help "
+              "lists the commands and options)\n")
+        << args;
+    EXPECT_TRUE(fs::is_empty(work)) << args;
   }
 }
 

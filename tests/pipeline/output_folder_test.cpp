@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "gcpstereo/core/error.h"
 #include "test_data.h"
 
 namespace gcpstereo::pipeline {
@@ -86,6 +87,23 @@ TEST(OutputFolder, StagingOfAKilledRunIsRemoved) {
   { OutputFolder out(dir.string()); }
   EXPECT_FALSE(fs::exists(dir / ".gcpstereo-staging-999999999"));
   EXPECT_TRUE(fs::exists(dir / ".gcpstereo-staging-1"));
+}
+
+// An empty path is no folder: a clear error (std::filesystem's own is ": Invalid argument"), and
+// nothing appears in the working folder.
+TEST(OutputFolder, EmptyPathIsRefused) {
+  const fs::path work = testing::MakeTempDir("gcpstereo-out");
+  const fs::path previous = fs::current_path();
+  fs::current_path(work);
+  std::string message = "no error";
+  try {
+    OutputFolder out("");
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  fs::current_path(previous);
+  EXPECT_EQ(message, "the output folder path is empty");
+  EXPECT_EQ(CountEntries(work), 0u);
 }
 
 }  // namespace

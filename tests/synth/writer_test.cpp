@@ -91,5 +91,25 @@ TEST(SynthWriterTest, ReplacesItsOwnEarlierSetAndRefusesOthers) {
   EXPECT_FALSE(fs::exists(other / "gt"));
 }
 
+// An empty folder path would put the data set into the working folder: refused, nothing written.
+TEST(SynthWriterTest, EmptyFolderPathIsRefused) {
+  SynthOptions options;
+  options.preset = "tiny";
+  options.supersampling = 1;
+  const SyntheticScene scene = GenerateScene(options);
+  const fs::path work = testing::MakeTempDir("synth_empty_path");
+  const fs::path previous = fs::current_path();
+  fs::current_path(work);
+  std::string message = "no error";
+  try {
+    WriteScene(scene, options, "");
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  fs::current_path(previous);
+  EXPECT_EQ(message, "the synthetic data set's folder path is empty");
+  EXPECT_TRUE(fs::is_empty(work));
+}
+
 }  // namespace
 }  // namespace gcpstereo::synth

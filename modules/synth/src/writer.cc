@@ -31,6 +31,8 @@ void MakeFolder(const fs::path& path) {
 }  // namespace
 
 void WriteScene(const SyntheticScene& scene, const SynthOptions& options, const std::string& dir) {
+  // "" is no folder: the files would land in the working folder.
+  if (dir.empty()) throw Error("the synthetic data set's folder path is empty");
   const fs::path root(dir);
   // A folder that already holds a data set: one this command wrote before (gt/scene.json) is
   // replaced, so no view of another preset stays behind; any other is left untouched.

@@ -13,7 +13,7 @@ namespace gcpstereo::pipeline {
 class OutputFolder {
  public:
   // Creates `final_dir` (and parents) if needed; throws IoError when that is impossible or when
-  // `final_dir` exists and is not a folder.
+  // `final_dir` exists and is not a folder, and Error when `final_dir` is empty.
   explicit OutputFolder(const std::string& final_dir);
   ~OutputFolder();
   OutputFolder(const OutputFolder&) = delete;
