@@ -61,7 +61,8 @@ void PipelineConfig::Register(config::Schema* s) {
          {"GCP sources; empty list = no GCP energy (the paper's baseline)"});
   s->Add("gcp.lidar.path", &gcp.lidar_path, {},
          {"point cloud (.ply, .pcd, KITTI .bin): world frame for strecha, sensor frame for "
-          "kitti_raw"});
+          "kitti_raw (the scan of the dataset.reference frame: a file named after another frame "
+          "warns)"});
   s->Add("gcp.depth_map.path", &gcp.depth_map.path, {},
          {"depth or disparity image of the reference view (PFM, 8/16-bit PNG/PGM; 0 or non-finite "
           "= no measurement)"});

@@ -4,6 +4,7 @@
 #include "gcpstereo/pipeline/run.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -256,6 +257,41 @@ void WarnOfLabelsAtTheRangeEnds(const cv::Mat& label_map, const LabelSpace& labe
   }
 }
 
+// KITTI raw: gcp.lidar.path is velodyne_points/data/NNNNNNNNNN.bin of one frame, and nothing ties
+// it to dataset.reference, so a config edited for another frame (or a --set of one key but not
+// the other) would take its GCPs from a scan of another moment of the drive. Warns when the scan's
+// file name is a frame number other than the reference's (a warning: the file may have been
+// renamed; a name that is not a number is not checked). Returns what report.json records
+// (dataset.lidar_scan), null when there is nothing to check.
+json WarnOfScanOfAnotherFrame(const PipelineConfig& options) {
+  const std::vector<std::string>& sources = options.gcp.sources;
+  if (options.dataset.format != "kitti_raw" ||
+      std::find(sources.begin(), sources.end(), "lidar") == sources.end()) {
+    return nullptr;
+  }
+  const std::string scan = std::filesystem::path(options.gcp.lidar_path).stem().string();
+  const std::string& frame = options.dataset.reference;
+  auto is_number = [](const std::string& name) {
+    return !name.empty() && std::all_of(name.begin(), name.end(),
+                                        [](unsigned char c) { return std::isdigit(c) != 0; });
+  };
+  if (!is_number(scan) || !is_number(frame)) return nullptr;
+  // The same number however many leading zeros (0000000010 = 10).
+  auto without_zeros = [](const std::string& digits) {
+    const size_t first = digits.find_first_not_of('0');
+    return first == std::string::npos ? std::string("0") : digits.substr(first);
+  };
+  const bool same = without_zeros(scan) == without_zeros(frame);
+  if (!same) {
+    spdlog::warn(
+        "gcp.lidar.path {} is by its name the Velodyne scan of frame {}, but dataset.reference is "
+        "frame {}: the LiDAR GCPs come from another moment of the drive (set gcp.lidar.path to "
+        "the scan of frame {}, unless the file was renamed)",
+        options.gcp.lidar_path, scan, frame, frame);
+  }
+  return {{"path", options.gcp.lidar_path}, {"frame", scan}, {"same_frame_as_reference", same}};
+}
+
 RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
                        const std::string& config_path) {
   const PipelineConfig& options = config.options();
@@ -293,6 +329,9 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
   spdlog::info("loaded {} views: reference {} ({}x{}) and {} neighbours",
                1 + dataset.neighbors.size(), reference.name, size.width, size.height,
                dataset.neighbors.size());
+  if (json scan = WarnOfScanOfAnotherFrame(options); !scan.is_null()) {
+    report["dataset"]["lidar_scan"] = std::move(scan);
+  }
   if (dataset.neighbors.empty()) {
     throw ConfigError("dataset.neighbors: no neighbour view to match the reference against");
   }

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/io/image_io.h"
 #include "gcpstereo/io/pfm.h"
 #include "gcpstereo/pipeline/evaluate.h"
 #include "gcpstereo/synth/generator.h"
@@ -382,6 +383,73 @@ TEST(MiddleburyRun, PlaneFitRemovesFattening) {
   EXPECT_GT(stage["fitted_segments"].get<int>(), stage["segments"].get<int>() / 2);
   EXPECT_TRUE(fs::exists(dir + "/with/plane_fit.png"));
   EXPECT_FALSE(without["stages"].contains("plane_fit"));
+}
+
+// A KITTI raw drive of two 80×30 frames, 0000000010 and 0000000020, each with a Velodyne scan of
+// a few points (synthetic calibration, as tests/io/dataset_io_test.cpp); returns the drive folder.
+std::string WriteTinyKittiDrive(const fs::path& root) {
+  const fs::path drive = root / "2011_01_01_drive_0001_sync";
+  std::ofstream(root / "calib_cam_to_cam.txt")
+      << "S_rect_02: 8.000000e+01 3.000000e+01\nR_rect_00: 1 0 0 0 1 0 0 0 1\n"
+         "P_rect_02: 100 0 40 10 0 100 15 0 0 0 1 0\nP_rect_03: 100 0 40 -40 0 100 15 0 0 0 1 0\n";
+  std::ofstream(root / "calib_velo_to_cam.txt") << "R: 0 -1 0 0 0 -1 1 0 0\nT: 0 0 0.1\n";
+  for (const char* folder : {"image_02/data", "image_03/data", "velodyne_points/data"}) {
+    fs::create_directories(drive / folder);
+  }
+  for (const std::string frame : {"0000000010", "0000000020"}) {
+    for (const char* camera : {"image_02", "image_03"}) {
+      cv::Mat image(30, 80, CV_8UC3);
+      cv::randu(image, 0, 255);
+      io::WritePng((drive / camera / "data" / (frame + ".png")).string(), image);
+    }
+    // x forward, y left, z up (Velodyne): 10 m ahead, spread across the view.
+    std::ofstream scan(drive / "velodyne_points" / "data" / (frame + ".bin"), std::ios::binary);
+    for (int i = 0; i < 5; ++i) {
+      const float point[4] = {10.0f, 1.0f - 0.5f * i, 0.0f, 0.5f};
+      scan.write(reinterpret_cast<const char*>(point), sizeof(point));
+    }
+  }
+  return drive.string();
+}
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// gcp.lidar.path of KITTI raw names one frame's scan and nothing tied it to dataset.reference:
+// a run of frame 20 with frame 10's scan went on silently. Now it warns (run.log, stderr) naming
+// both frames and report.json records the scan's frame; the same frame or a file name that is not
+// a frame number (a renamed file) gives no warning.
+TEST(KittiRun, ScanOfAnotherFrameIsWarnedAndReported) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-kitti-scan");
+  const std::string drive = WriteTinyKittiDrive(dir);
+  fs::copy_file(drive + "/velodyne_points/data/0000000010.bin", dir / "renamed.bin");
+  auto run = [&](const std::string& frame, const std::string& scan, const std::string& out) {
+    LoadedConfig config;
+    config.Load("", {"dataset.format=kitti_raw", "dataset.path=" + drive,
+                     "dataset.reference=" + frame, "gcp.sources=[lidar]", "gcp.lidar.path=" + scan,
+                     "runtime.stop_after=load", "runtime.log_level=warn"});
+    return nlohmann::json::parse(RunPipeline(config, (dir / out).string(), "(test)").report_json);
+  };
+  const std::string scan_10 = drive + "/velodyne_points/data/0000000010.bin";
+  const nlohmann::json other = run("0000000020", scan_10, "other");
+  EXPECT_EQ(other["dataset"]["lidar_scan"],
+            nlohmann::json(
+                {{"path", scan_10}, {"frame", "0000000010"}, {"same_frame_as_reference", false}}));
+  const std::string log = ReadText(dir / "other" / "run.log");
+  EXPECT_NE(log.find("[warning] gcp.lidar.path " + scan_10 +
+                     " is by its name the Velodyne scan of frame 0000000010, but "
+                     "dataset.reference is frame 0000000020"),
+            std::string::npos)
+      << log;
+
+  const nlohmann::json same = run("0000000010", scan_10, "same");
+  EXPECT_TRUE(same["dataset"]["lidar_scan"]["same_frame_as_reference"].get<bool>());
+  EXPECT_EQ(ReadText(dir / "same" / "run.log").find("[warning]"), std::string::npos);
+  const nlohmann::json renamed = run("0000000020", (dir / "renamed.bin").string(), "renamed");
+  EXPECT_FALSE(renamed["dataset"].contains("lidar_scan"));
+  EXPECT_EQ(ReadText(dir / "renamed" / "run.log").find("[warning]"), std::string::npos);
 }
 
 // KITTI frame 10 at half size (5 s a run): the weighted-median D̂ of kitti_lidar.yaml against the
