@@ -144,7 +144,9 @@ void AddEvalOptions(CLI::App* eval, EvalArgs* a) {
   eval->add_option("--sigma", a->sigma, "constant laser sigma when there is no --gt-sigma map");
   eval->add_option("--gt-mesh", a->gt_mesh, "ground-truth surface mesh (PLY, world coordinates)");
   eval->add_option("--gt-points", a->gt_points, "ground-truth point cloud (PLY/PCD, world)");
-  eval->add_option("--camera", a->camera, "Strecha .camera of the depth map's view");
+  eval->add_option("--camera", a->camera,
+                   "Strecha .camera of the depth map's view (one of a larger or smaller image of "
+                   "the same aspect ratio is scaled to the map; another aspect ratio is an error)");
   eval->add_option("--gt-disparity", a->gt_disparity,
                    "ground-truth disparity (PFM, or PNG/PGM divided by --gt-scale; 0 = unknown)");
   eval->add_option("--gt-disparity-right", a->gt_disparity_right,

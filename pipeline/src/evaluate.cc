@@ -67,6 +67,31 @@ void RequireSameSize(const cv::Mat& a, const std::string& a_name, const cv::Mat&
   }
 }
 
+// The --camera of a depth map, at the map's size. A camera of the full-size image serves a map
+// computed at a fraction of it (dataset.scale): it is scaled by the width ratio. The height this
+// predicts may differ from the map's by less than a pixel (however the map's size was rounded);
+// the camera then takes the map's height. A pixel or more is another aspect ratio: the camera is
+// of another image, and the ground truth rendered through it would not be the map's view.
+Camera CameraOfMap(const std::string& camera_path, const cv::Mat& map,
+                   const std::string& map_path) {
+  const Camera camera = io::ReadStrechaCamera(camera_path);
+  if (camera.width == map.cols && camera.height == map.rows) return camera;
+  const double scale = static_cast<double>(map.cols) / camera.width;
+  const double predicted_rows = camera.height * scale;
+  if (!(std::abs(predicted_rows - map.rows) < 1.0)) {
+    throw Error("eval: --camera " + camera_path + " is " + std::to_string(camera.width) + "x" +
+                std::to_string(camera.height) + " and the depth map " + map_path + " " +
+                std::to_string(map.cols) + "x" + std::to_string(map.rows) +
+                ": another aspect ratio (scaled to the map's width, x" + FormatNumber(scale) +
+                ", the camera is " + FormatNumber(predicted_rows) + " px high, not " +
+                std::to_string(map.rows) + "); the camera is of another image");
+  }
+  Camera scaled = camera.Rescaled(scale);
+  scaled.width = map.cols;
+  scaled.height = map.rows;
+  return scaled;
+}
+
 // The largest "counted" anywhere in a metrics object (-1 when none is there).
 long long MostCounted(const nlohmann::json& j) {
   long long most = -1;
@@ -147,11 +172,7 @@ std::string RunEvaluation(const EvalRequest& r) {
       RequireSameSize(depth, r.depth, gt.depth, r.gt_depth);
     } else if (!r.gt_mesh.empty() || !r.gt_points.empty()) {
       if (r.camera.empty()) throw ConfigError("eval: --gt-mesh/--gt-points need --camera");
-      Camera camera = io::ReadStrechaCamera(r.camera);
-      if (camera.width != depth.cols || camera.height != depth.rows) {
-        camera = camera.Rescaled(static_cast<double>(depth.cols) / camera.width);
-      }
-      RequireSameSize(depth, r.depth, cv::Mat(camera.height, camera.width, CV_8U), r.camera);
+      const Camera camera = CameraOfMap(r.camera, depth, r.depth);
       gt.depth = !r.gt_mesh.empty()
                      ? eval::RenderMeshDepth(io::ReadMeshPly(r.gt_mesh), camera).depth
                      : eval::RenderPointDepth(io::ReadPointCloud(r.gt_points), camera).depth;

@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "gcpstereo/core/camera.h"
+#include "gcpstereo/io/camera_io.h"
 #include "test_data.h"
 
 namespace gcpstereo {
@@ -176,6 +178,47 @@ TEST(Cli, FountainAtHalfScaleReportsElevenViews) {
   EXPECT_NE(report.find("\"width\": 1536"), std::string::npos);
   EXPECT_NE(report.find("\"height\": 1024"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir / "out" / "effective_config.yaml"));
+}
+
+// eval --camera with a camera of another size than the depth map: one of the full-size image (twice
+// the map's size, also with an odd height that halves to 107.5 rows) is scaled to the map and
+// scores as the view's own camera; one of another aspect ratio is refused naming both sizes. (The
+// odd height was refused before, and the refusal named the camera scaled by the width ratio,
+// 160x120, a size its file does not have.)
+TEST(Cli, EvalCameraOfAnotherAspectRatioIsRefused) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli");
+  const fs::path data = dir / "tiny";
+  ASSERT_EQ(RunCli("synth --preset tiny -q -o " + data.string()).status, 0);
+  const Camera own = io::ReadStrechaCamera((data / "cameras" / "0005.png.camera").string());
+  ASSERT_EQ(own.width, 160);
+  ASSERT_EQ(own.height, 107);
+  auto camera_twice_the_size = [&](int height) {
+    Camera camera = own.Rescaled(2.0);
+    camera.height = height;
+    const std::string path = (dir / ("320x" + std::to_string(height) + ".camera")).string();
+    io::WriteStrechaCamera(path, camera);
+    return path;
+  };
+  const std::string depth = (data / "gt" / "0005.depth.pfm").string();
+  auto eval = [&](const std::string& camera) {
+    return RunCli("eval --depth " + depth + " --gt-mesh " + (data / "gt" / "mesh.ply").string() +
+                      " --sigma 0.01 --camera " + camera,
+                  true);
+  };
+  const Result reference = eval((data / "cameras" / "0005.png.camera").string());
+  ASSERT_EQ(reference.status, 0) << reference.output;
+  for (const int height : {214, 215}) {
+    const Result r = eval(camera_twice_the_size(height));
+    EXPECT_EQ(r.status, 0) << height << ": " << r.output;
+    EXPECT_EQ(r.output, reference.output) << height;
+  }
+  const std::string other = camera_twice_the_size(240);
+  const Result r = eval(other);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output, "gcpstereo: error: eval: --camera " + other +
+                          " is 320x240 and the depth map " + depth +
+                          " 160x107: another aspect ratio (scaled to the map's width, x0.5, the "
+                          "camera is 120 px high, not 107); the camera is of another image\n");
 }
 
 }  // namespace
