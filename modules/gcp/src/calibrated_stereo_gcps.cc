@@ -12,14 +12,13 @@
 #include <utility>
 
 #include <Eigen/Dense>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
 #include "gcpstereo/core/system.h"
+#include "gcpstereo/cost/rectify.h"
 
 namespace gcpstereo::gcp {
 namespace {
@@ -44,29 +43,17 @@ PairMaps MatchPair(const View& reference, const View& neighbor, double min_depth
   maps.wta_depth = maps.depth.clone();
   maps.wta_sigma = maps.sigma.clone();
 
-  // Relative pose, camera 1 = reference: X_nb = R X_ref + T.
-  const Eigen::Matrix3d r_rel =
-      nb_camera.world_from_camera_rotation.transpose() * ref_camera.world_from_camera_rotation;
-  const Eigen::Vector3d t_rel = nb_camera.world_from_camera_rotation.transpose() *
-                                (ref_camera.center_world - nb_camera.center_world);
-  cv::Mat k1, k2, r, t;
-  cv::eigen2cv(ref_camera.K, k1);
-  cv::eigen2cv(nb_camera.K, k2);
-  cv::eigen2cv(r_rel, r);
-  cv::eigen2cv(t_rel, t);
-  cv::Mat r1, r2, p1, p2, q;
-  cv::stereoRectify(k1, cv::noArray(), k2, cv::noArray(), size, r, t, r1, r2, p1, p2, q,
-                    cv::CALIB_ZERO_DISPARITY, 1.0, size);
-  if (std::abs(p2.at<double>(1, 3)) > std::abs(p2.at<double>(0, 3))) {
+  const cost::RectifiedCalibratedPair pair = cost::RectifyCalibratedPair(reference, neighbor);
+  if (pair.vertical) {
     spdlog::warn("stereo GCPs: pair ({}, {}) rectifies vertically; skipped", reference.name,
                  neighbor.name);
     return maps;
   }
-  const double f = p1.at<double>(0, 0);
-  const double cx = p1.at<double>(0, 2), cy = p1.at<double>(1, 2);
-  const double baseline = std::abs(p2.at<double>(0, 3)) / f;
+  const double f = pair.focal_px;
+  const double cx = pair.cx, cy = pair.cy;
+  const double baseline = pair.baseline;
   summary->focal_px = f;
-  summary->mirrored = p2.at<double>(0, 3) > 0.0;  // neighbour left of the reference
+  summary->mirrored = pair.mirrored;
 
   const double fb = f * baseline;
   const int min_d = std::max(0, static_cast<int>(std::floor(0.9 * fb / max_depth)) - 2);
@@ -75,32 +62,15 @@ PairMaps MatchPair(const View& reference, const View& neighbor, double min_depth
   summary->max_disparity_px = max_d;
   if (max_d <= min_d) return maps;
 
-  // Rectified images and validity masks (255 = a source pixel, eroded by 1 px against the
-  // interpolation border).
-  auto rectify = [&](const cv::Mat& image, const cv::Mat& k, const cv::Mat& rect,
-                     const cv::Mat& projection, cv::Mat* out, cv::Mat* valid) {
-    cv::Mat map_x, map_y;
-    cv::initUndistortRectifyMap(k, cv::noArray(), rect, projection, size, CV_32FC1, map_x, map_y);
-    cv::remap(image, *out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-    const cv::Mat ones(image.size(), CV_8U, cv::Scalar(255));
-    cv::remap(ones, *valid, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
-    cv::erode(*valid, *valid, cv::Mat());
-    if (summary->mirrored) {
-      cv::flip(*out, *out, 1);
-      cv::flip(*valid, *valid, 1);
-    }
-  };
-  cv::Mat left, right, left_valid, right_valid;
-  rectify(reference.image, k1, r1, p1, &left, &left_valid);
-  rectify(neighbor.image, k2, r2, p2, &right, &right_valid);
-
+  const cv::Mat& left = pair.left;
+  const cv::Mat& right = pair.right;
+  const cv::Mat& left_valid = pair.left_valid;
+  const cv::Mat& right_valid = pair.right_valid;
   const StereoPairEvidence evidence = ComputeStereoEvidence(left, right, min_d, max_d, options);
   const StereoGcpResult stereo = SelectStereoGcps(evidence, options);
   summary->num_matches = stereo.num_gcps;
 
-  Eigen::Matrix3d rect_from_ref;
-  cv::cv2eigen(r1, rect_from_ref);
-  const Eigen::Matrix3d ref_from_rect = rect_from_ref.transpose();
+  const Eigen::Matrix3d& ref_from_rect = pair.ref_from_rect;
   // Rectified (mirrored) left pixel (x, y) at disparity d → reference pixel and z-buffered depth.
   auto splat = [&](int x, int y, double d, cv::Mat* depth_map, cv::Mat* sigma_map) {
     const int xr = x - static_cast<int>(std::lround(d));
