@@ -12,9 +12,9 @@
 namespace gcpstereo::cost {
 namespace {
 
-GcpSet Gcps(const std::vector<double>& depths) {
+GcpSet Gcps(const std::vector<double>& depths, GcpSource source = GcpSource::kLidar) {
   GcpSet set;
-  for (double d : depths) set.points.push_back(Gcp{0, 0, d, 0.0, GcpSource::kLidar});
+  for (double d : depths) set.points.push_back(Gcp{0, 0, d, 0.0, source});
   return set;
 }
 
@@ -221,7 +221,7 @@ TEST(LabelRange, MatchedDisparitiesOfARectifiedPair) {
   EXPECT_FALSE(DisparityRangeFromMatching(flat, flat).has_value());
   EXPECT_EQ(ErrorOf([&] { DisparityRangeFromMatching(flat, flat.colRange(0, 300).clone()); }),
             "DisparityRangeFromMatching: the images must be non-empty 8-bit grey or BGR images of "
-            "one size and type");
+            "one size and type (and the mask CV_8U of their size)");
 }
 
 TEST(LabelRange, RectifiedPairRangeSpansMatchesAndGcps) {
@@ -248,26 +248,32 @@ TEST(LabelRange, RectifiedPairRangeSpansMatchesAndGcps) {
   LabelRangeOptions options;
   options.gcp_low_percentile = 0;
   options.gcp_high_percentile = 100;
-  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt, Gcps({5.0, 5.0}),
-                     ref, nbs, 30.0, true, options, &summary);
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt,
+                     Gcps({5.0, 5.0}, GcpSource::kStereo), ref, nbs, 30.0, true, options, &summary);
   EXPECT_EQ(summary.source, "gcps+matching");
   EXPECT_NEAR(s.max(), matched->second * 1.1, 1e-9);
   // In depth, the far end stays the GCPs' (depth 3, disparity 10; the background is at depth 5).
-  s = MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, Gcps({2.0, 3.0}), ref,
-                     nbs, 30.0, true, options, &summary);
+  s = MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt,
+                     Gcps({2.0, 3.0}, GcpSource::kStereo), ref, nbs, 30.0, true, options, &summary);
   EXPECT_EQ(summary.source, "gcps+matching");
   EXPECT_NEAR(s.min(), 30.0 / matched->second / 1.1, 1e-9);
   EXPECT_NEAR(s.max(), 3.0 * 1.1, 1e-9);
   // … and a GCP nearer than anything matched widens the range beyond the matches.
-  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt, Gcps({5.0, 0.5}),
-                     ref, nbs, 30.0, true, options, &summary);
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt,
+                     Gcps({5.0, 0.5}, GcpSource::kStereo), ref, nbs, 30.0, true, options, &summary);
   EXPECT_NEAR(s.max(), 60.0 * 1.1, 1e-9);
+  // A range sensor's GCPs (here a LiDAR's, on the background only) are the range by themselves.
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt, Gcps({5.0, 5.0}),
+                     ref, nbs, 30.0, true, options, &summary);
+  EXPECT_EQ(summary.source, "gcps");
+  EXPECT_NEAR(s.max(), 6.0 * 1.1, 1e-9);
   // A textureless pair falls back to the GCPs.
   const cv::Mat flat(120, 320, CV_8UC3, cv::Scalar(90, 90, 90));
   const View flat_ref{"r", flat, ref.camera};
   const std::vector<View> flat_nbs = {View{"n", flat, nbs[0].camera}};
-  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt, Gcps({5.0, 2.0}),
-                     flat_ref, flat_nbs, 30.0, true, options, &summary);
+  s = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt,
+                     Gcps({5.0, 2.0}, GcpSource::kStereo), flat_ref, flat_nbs, 30.0, true, options,
+                     &summary);
   EXPECT_EQ(summary.source, "gcps");
   EXPECT_NEAR(s.max(), 15.0 * 1.1, 1e-9);
 }

@@ -1,6 +1,7 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 // The plane sweep on the synth module's `tiny` scene (5 views at 160×107 placed like fountain-P11's
 // cameras 0003–0007, exact ground truth, sensor noise and exposure changes).
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <string>
@@ -8,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "gcpstereo/cost/label_range.h"
 #include "gcpstereo/cost/plane_sweep.h"
 #include "gcpstereo/cost/winner_take_all.h"
 #include "gcpstereo/synth/generator.h"
@@ -204,6 +206,31 @@ TEST(TinyScene, PlaneSweepWtaWithWindowRecoversDepth) {
   options.window.window_px = 7;
   options.window.filter = "box";
   EXPECT_GE(WtaWithinOneLabel(options, "7x7 box window, tau 30"), 0.95);
+}
+
+// The depths the calibrated views show, from the reference rectified with its nearest neighbour
+// and matched over every disparity: they cover the scene's true depths (printed for the record),
+// where the frustum overlap alone is unbounded.
+TEST(TinyScene, MatchedDepthRangeCoversTheScene) {
+  const Tiny& t = GetTiny();
+  std::vector<float> depths;
+  for (int r = 0; r < t.depth.rows; ++r) {
+    for (int c = 0; c < t.depth.cols; ++c) {
+      const float z = t.depth.at<float>(r, c);
+      if (std::isfinite(z) && z > 0.0f) depths.push_back(z);
+    }
+  }
+  ASSERT_FALSE(depths.empty());
+  std::sort(depths.begin(), depths.end());
+  const double lo = depths[depths.size() / 100], hi = depths[depths.size() * 99 / 100];
+  const auto range = DepthRangeFromMatching(t.reference, t.neighbors, false);
+  ASSERT_TRUE(range.has_value());
+  std::cout << "true depths (1st…99th percentile) " << lo << " … " << hi << "; matched "
+            << range->first << " … " << range->second << "\n";
+  EXPECT_LE(range->first, lo * 1.1);
+  EXPECT_GE(range->second, hi / 1.1);
+  EXPECT_GT(range->first, lo / 2.0);
+  EXPECT_LT(range->second, hi * 2.0);
 }
 
 }  // namespace

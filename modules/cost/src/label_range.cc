@@ -13,6 +13,7 @@
 
 #include "cost_internal.h"
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/cost/rectify.h"
 
 namespace gcpstereo::cost {
 
@@ -162,20 +163,25 @@ std::pair<double, double> DepthRangeFromFrustumOverlap(const View& reference,
 }
 
 std::optional<std::pair<double, double>> DisparityRangeFromMatching(const cv::Mat& left,
-                                                                    const cv::Mat& right) {
+                                                                    const cv::Mat& right,
+                                                                    const cv::Mat& left_valid) {
   if (left.empty() || left.size() != right.size() || left.type() != right.type() ||
-      left.depth() != CV_8U || (left.channels() != 1 && left.channels() != 3)) {
+      left.depth() != CV_8U || (left.channels() != 1 && left.channels() != 3) ||
+      (!left_valid.empty() && (left_valid.size() != left.size() || left_valid.type() != CV_8U))) {
     throw Error(
         "DisparityRangeFromMatching: the images must be non-empty 8-bit grey or BGR "
-        "images of one size and type");
+        "images of one size and type (and the mask CV_8U of their size)");
   }
-  // Half resolution: the range needs no sub-pixel precision, and small mismatched regions merge
-  // into their surroundings.
-  const double scale = left.cols >= 200 ? 0.5 : 1.0;
-  cv::Mat l = left, r = right;
+  // Half resolution (at most 640 px wide): the range needs no sub-pixel precision, and small
+  // mismatched regions merge into their surroundings.
+  const double scale = left.cols >= 200 ? std::min(0.5, 640.0 / left.cols) : 1.0;
+  cv::Mat l = left, r = right, valid = left_valid;
   if (scale != 1.0) {
     cv::resize(left, l, cv::Size(), scale, scale, cv::INTER_AREA);
     cv::resize(right, r, cv::Size(), scale, scale, cv::INTER_AREA);
+    if (!left_valid.empty()) {
+      cv::resize(left_valid, valid, l.size(), 0.0, 0.0, cv::INTER_NEAREST);
+    }
   }
   // Every disparity below the width (the matcher wants a multiple of 16). The matcher leaves the
   // first `search` columns unmatched, so both images get that many replicated columns on the left.
@@ -209,14 +215,67 @@ std::optional<std::pair<double, double>> DisparityRangeFromMatching(const cv::Ma
     const auto* row = disparity16.ptr<std::int16_t>(y);
     const float* m = mean.ptr<float>(y);
     const float* m2 = mean_of_squares.ptr<float>(y);
+    const std::uint8_t* in_mask = valid.empty() ? nullptr : valid.ptr<std::uint8_t>(y);
     for (int x = 0; x < disparity16.cols; ++x) {
       if (row[x] < 0 || m2[x] - m[x] * m[x] < 1.0f) continue;  // grey-level variance < 1
+      if (in_mask != nullptr && in_mask[x] == 0) continue;
       lowest = std::min<int>(lowest, row[x]);
       highest = std::max<int>(highest, row[x]);
     }
   }
   if (highest < 0) return std::nullopt;
   return std::make_pair(lowest / 16.0 / scale, highest / 16.0 / scale);
+}
+
+std::optional<std::pair<double, double>> DepthRangeFromMatching(const View& reference,
+                                                                const std::vector<View>& neighbors,
+                                                                bool rectified_pair) {
+  if (neighbors.empty()) return std::nullopt;
+  if (rectified_pair) {
+    // d = f·B / depth, B the baseline to the first neighbour (the right image).
+    const View& right = neighbors.front();
+    const double numerator = reference.camera.K(0, 0) *
+                             (right.camera.center_world.x() - reference.camera.center_world.x());
+    if (!(numerator > 0.0)) return std::nullopt;
+    const auto matched = DisparityRangeFromMatching(reference.image, right.image);
+    if (!matched || !(matched->second > 0.0)) return std::nullopt;
+    return std::make_pair(numerator / matched->second,
+                          matched->first > 0.0 ? numerator / matched->first : kInf);
+  }
+  // Calibrated views: the nearest neighbour (camera centres; ties: list order) that rectifies
+  // horizontally with the reference.
+  std::vector<std::size_t> order(neighbors.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return (neighbors[a].camera.center_world - reference.camera.center_world).norm() <
+           (neighbors[b].camera.center_world - reference.camera.center_world).norm();
+  });
+  for (const std::size_t i : order) {
+    const View& neighbor = neighbors[i];
+    if (neighbor.image.size() != reference.image.size() || reference.image.empty()) continue;
+    const RectifiedCalibratedPair pair = RectifyCalibratedPair(reference, neighbor);
+    if (pair.vertical) continue;
+    const auto matched = DisparityRangeFromMatching(pair.left, pair.right, pair.left_valid);
+    if (!matched || !(matched->second > 0.0)) return std::nullopt;
+    // z_rect = f·B / d; the reference camera's z of the point at rectified pixel (x, y) is
+    // z_rect · (row 3 of ref_from_rect) · ((x − cx)/f, (y − cy)/f, 1), affine in x and y, so its
+    // extremes over the image lie at the corners.
+    const double fb = pair.focal_px * pair.baseline;
+    const Eigen::RowVector3d row = pair.ref_from_rect.row(2);
+    double lowest = kInf, highest = 0.0;
+    for (const double x : {0.0, reference.image.cols - 1.0}) {
+      for (const double y : {0.0, reference.image.rows - 1.0}) {
+        const double factor = row.dot(
+            Eigen::Vector3d((x - pair.cx) / pair.focal_px, (y - pair.cy) / pair.focal_px, 1.0));
+        lowest = std::min(lowest, factor);
+        highest = std::max(highest, factor);
+      }
+    }
+    if (!(lowest > 0.0)) return std::nullopt;
+    return std::make_pair(fb / matched->second * lowest,
+                          matched->first > 0.0 ? fb / matched->first * highest : kInf);
+  }
+  return std::nullopt;
 }
 
 LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::optional<double> min,
@@ -230,29 +289,23 @@ LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::op
     options.Check();
     std::pair<double, double> depth_range;
     std::string source;
-    // The pair's disparities d = f·B / depth, B the baseline to the first neighbour.
-    const double pair_numerator =
-        rectified_pair && !neighbors.empty()
-            ? reference.camera.K(0, 0) *
-                  (neighbors.front().camera.center_world.x() - reference.camera.center_world.x())
-            : 0.0;
-    const std::optional<std::pair<double, double>> matched =
-        pair_numerator > 0.0 ? DisparityRangeFromMatching(reference.image, neighbors.front().image)
-                             : std::nullopt;
-    const double matched_near =
-        matched ? pair_numerator / matched->second / (1.0 + options.margin) : kInf;
+    // What the images show, unless a range sensor measured the scene (a LiDAR, a depth image):
+    // stereo GCPs are scarce on the nearest surfaces.
+    const bool measured = std::any_of(gcps.points.begin(), gcps.points.end(),
+                                      [](const Gcp& g) { return g.source != GcpSource::kStereo; });
+    std::optional<std::pair<double, double>> matched;
+    if (!measured) matched = DepthRangeFromMatching(reference, neighbors, rectified_pair);
     if (!gcps.empty()) {
       depth_range = DepthRangeFromGcps(gcps, options.gcp_low_percentile,
                                        options.gcp_high_percentile, options.margin);
       source = "gcps";
       if (matched) {  // the near end only: the matcher's far end is often the sky (disparity 0)
-        depth_range.first = std::min(depth_range.first, matched_near);
+        depth_range.first = std::min(depth_range.first, matched->first / (1.0 + options.margin));
         source = "gcps+matching";
       }
     } else if (matched) {
-      depth_range = {matched_near, matched->first > 0.0
-                                       ? pair_numerator / matched->first * (1.0 + options.margin)
-                                       : kInf};
+      depth_range = {matched->first / (1.0 + options.margin),
+                     matched->second * (1.0 + options.margin)};
       source = "matching";
     } else {
       depth_range = DepthRangeFromFrustumOverlap(reference, neighbors, options);
@@ -281,9 +334,9 @@ LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::op
         "automatic depth range [" + internal::Str(z_min) + ", " + internal::Str(z_max) +
         "] from the " +
         (source == "gcps"       ? "GCPs"
-         : source == "matching" ? "pair's matched disparities"
+         : source == "matching" ? "views' matched disparities"
          : source == "frustum"  ? "neighbours' frustum overlap"
-                                : "GCPs and the pair's matched disparities");
+                                : "GCPs and the views' matched disparities");
     if (!max && kind == LabelSpaceKind::kDepth && !std::isfinite(z_max)) {
       throw ConfigError(ViolatedConstraint(
           "labels.max", "auto",

@@ -62,16 +62,27 @@ std::pair<double, double> DepthRangeFromFrustumOverlap(const View& reference,
 
 // The disparities a rectified pair's images show, for an automatic range before any stereo
 // matching of the pipeline: OpenCV's semi-global matcher (cv::StereoSGBM, 5×5 blocks, uniqueness
-// 10 %, left-right check to 1 px) on both images at half resolution (full resolution below 200 px
-// width), searched over every disparity below the width (the left image is padded by the search
-// range so that its left columns are matched too). Disparities of connected regions smaller than
-// 0.5 % of the image, or varying by more than 1 px inside a region, are dropped as mismatches;
-// so are pixels whose 5×5 block has no texture (grey-level variance below 1), which match every
-// disparity alike. The result is the smallest and largest surviving disparity, in pixels of
-// `left` (left x minus right x); std::nullopt when nothing survives (e.g. a textureless pair).
-// `left` and `right` are 8-bit BGR or grey images of one size.
-std::optional<std::pair<double, double>> DisparityRangeFromMatching(const cv::Mat& left,
-                                                                    const cv::Mat& right);
+// 10 %, left-right check to 1 px) on both images at half resolution (at most 640 px wide; full
+// resolution below 200 px), searched over every disparity below the width (the left image is
+// padded by the search range so that its left columns are matched too). Disparities of connected
+// regions smaller than 0.5 % of the image, or varying by more than 1 px inside a region, are
+// dropped as mismatches; so are pixels whose 5×5 block has no texture (grey-level variance below
+// 1), which match every disparity alike, and pixels where `left_valid` (optional, CV_8U) is 0.
+// The result is the smallest and largest surviving disparity, in pixels of `left` (left x minus
+// right x); std::nullopt when nothing survives (e.g. a textureless pair). `left` and `right` are
+// 8-bit BGR or grey images of one size.
+std::optional<std::pair<double, double>> DisparityRangeFromMatching(
+    const cv::Mat& left, const cv::Mat& right, const cv::Mat& left_valid = cv::Mat());
+
+// The depths (reference camera z) the views show, [near, far] (far = +inf for disparity 0), from
+// DisparityRangeFromMatching: on the rectified pair of the reference and its first neighbour
+// (`rectified_pair`, the neighbour right of the reference), or, for calibrated views, on the
+// reference rectified with its nearest neighbour (RectifyCalibratedPair; the first that
+// rectifies horizontally), the rectified depths bounded in the reference's z over the image's
+// corners. std::nullopt when there is no usable neighbour or nothing matched.
+std::optional<std::pair<double, double>> DepthRangeFromMatching(const View& reference,
+                                                                const std::vector<View>& neighbors,
+                                                                bool rectified_pair);
 
 // Where MakeLabelSpace took its range from.
 struct LabelRangeSummary {
@@ -84,17 +95,16 @@ struct LabelRangeSummary {
 // Builds the label space of the run (configuration keys labels.space, labels.count, labels.min,
 // labels.max): `count` labels equally spaced in `kind` between min and max (in the space's unit;
 // disparity in the data set's GT convention, disparity = disparity_numerator / depth).
-// A missing bound is filled from an automatic depth range: from the GCPs (DepthRangeFromGcps) when
-// `gcps` is not empty, else from the frustum overlap of `reference` and `neighbors`. For a
-// rectified pair (`rectified_pair`: the first of `neighbors` is the right image) the disparities
-// the images show (DisparityRangeFromMatching, widened by options.margin like the GCP range) come
-// first: without GCPs they are the range; with GCPs they extend its near end, since stereo GCPs are
-// scarce on the nearest surfaces and a LiDAR may not reach them (the matcher's far end is often the
-// sky at disparity 0, so the far end stays the GCPs'). The depth range [z_min, z_max] maps to
-// [z_min, z_max] (depth), [1/z_max, 1/z_min] (inverse depth) or [num/z_max, num/z_min]
-// (disparity), with 1/+inf = 0. Throws ConfigError when a depth space would
-// need an unbounded maximum (set labels.max or labels.auto.max_depth), or when the result is not a
-// valid LabelSpace.
+// A missing bound is filled from an automatic depth range. When no GCP comes from a range sensor
+// (all are stereo GCPs, or there are none), the depths the views show (DepthRangeFromMatching,
+// widened by options.margin as the GCP range) come first: without GCPs they are the range; with
+// stereo GCPs they extend its near end, since image matches are scarce on the nearest surfaces (the
+// matcher's far end is often the sky at disparity 0, so the far end stays the GCPs'). Otherwise
+// (LiDAR or depth-image GCPs, or nothing matched) the range is the GCPs' (DepthRangeFromGcps), or
+// without GCPs the frustum overlap of `reference` and `neighbors`. The depth range [z_min, z_max]
+// maps to [z_min, z_max] (depth), [1/z_max, 1/z_min] (inverse depth) or [num/z_max, num/z_min]
+// (disparity), with 1/+inf = 0. Throws ConfigError when a depth space would need an unbounded
+// maximum (set labels.max or labels.auto.max_depth), or when the result is not a valid LabelSpace.
 // Disparity labels: an automatic minimum is 0 (infinite depth). A range starting at the nearest
 // matched background leaves the band along the left border, which the right image does not see,
 // without a label of any data (Rocks1, labels 17…61 against 0…61: bad-1 all 10.61 % against
