@@ -52,8 +52,8 @@ void PipelineConfig::Register(config::Schema* s) {
           "disparity (labels.space disparity)"});
   s->Add("labels.min", &labels.min, Range::AtLeast(0.0),
          {"lowest hypothesis in the space's unit (depth: data set unit; disparity: px in the "
-          "ground truth's convention); auto = from the GCPs, the rectified pair's matched "
-          "disparities (disparity labels: 0) or the views' overlap"});
+          "ground truth's convention); auto = from a range sensor's GCPs, else from the views' "
+          "matched disparities and stereo GCPs (disparity labels: 0), else the views' overlap"});
   s->Add("labels.max", &labels.max, Range::AtLeast(0.0),
          {"highest hypothesis; auto as labels.min"});
 
