@@ -244,6 +244,23 @@ TEST(LabelRange, RectifiedPairRangeSpansMatchesAndGcps) {
                      30.0, true, {}, &summary);
   EXPECT_NEAR(s.min(), 30.0 / matched->second / 1.1, 1e-9);
   EXPECT_NEAR(s.max(), 30.0 / matched->first * 1.1, 1e-9);
+  // A background at disparity 0 (the sky) leaves depth unbounded: labels.auto.max_depth caps it.
+  {
+    const auto [sky_left, sky_right] = ShiftedPair(320, 0, 40);
+    const View sky_ref{"r", sky_left, ref.camera};
+    const std::vector<View> sky_nbs = {View{"n", sky_right, nbs[0].camera}};
+    EXPECT_NE(ErrorOf([&] {
+                MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, GcpSet{},
+                               sky_ref, sky_nbs, 30.0, true);
+              }).find("is unbounded; set labels.max or labels.auto.max_depth"),
+              std::string::npos);
+    LabelRangeOptions capped;
+    capped.max_depth = 50.0;
+    s = MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, GcpSet{}, sky_ref,
+                       sky_nbs, 30.0, true, capped, &summary);
+    EXPECT_EQ(summary.source, "matching");
+    EXPECT_EQ(s.max(), 50.0);
+  }
   // GCPs only on the background (depth 5 = disparity 6): the square's disparities still count…
   LabelRangeOptions options;
   options.gcp_low_percentile = 0;

@@ -234,6 +234,8 @@ std::optional<std::pair<double, double>> DepthRangeFromMatching(const View& refe
   if (rectified_pair) {
     // d = f·B / depth, B the baseline to the first neighbour (the right image).
     const View& right = neighbors.front();
+    if (reference.image.empty() || right.image.size() != reference.image.size())
+      return std::nullopt;
     const double numerator = reference.camera.K(0, 0) *
                              (right.camera.center_world.x() - reference.camera.center_world.x());
     if (!(numerator > 0.0)) return std::nullopt;
@@ -244,13 +246,7 @@ std::optional<std::pair<double, double>> DepthRangeFromMatching(const View& refe
   }
   // Calibrated views: the nearest neighbour (camera centres; ties: list order) that rectifies
   // horizontally with the reference.
-  std::vector<std::size_t> order(neighbors.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return (neighbors[a].camera.center_world - reference.camera.center_world).norm() <
-           (neighbors[b].camera.center_world - reference.camera.center_world).norm();
-  });
-  for (const std::size_t i : order) {
+  for (const std::size_t i : NeighborsByDistance(reference, neighbors)) {
     const View& neighbor = neighbors[i];
     if (neighbor.image.size() != reference.image.size() || reference.image.empty()) continue;
     const RectifiedCalibratedPair pair = RectifyCalibratedPair(reference, neighbor);
@@ -304,8 +300,9 @@ LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::op
         source = "gcps+matching";
       }
     } else if (matched) {
+      // labels.auto.max_depth caps the far end, as for the frustum (the sky matches disparity 0).
       depth_range = {matched->first / (1.0 + options.margin),
-                     matched->second * (1.0 + options.margin)};
+                     std::min(matched->second * (1.0 + options.margin), options.max_depth)};
       source = "matching";
     } else {
       depth_range = DepthRangeFromFrustumOverlap(reference, neighbors, options);

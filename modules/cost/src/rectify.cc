@@ -1,6 +1,7 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/cost/rectify.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <opencv2/calib3d.hpp>
@@ -56,6 +57,17 @@ RectifiedCalibratedPair RectifyCalibratedPair(const View& reference, const View&
   rectify(reference.image, k1, r1, p1, &pair.left, &pair.left_valid);
   rectify(neighbor.image, k2, r2, p2, &pair.right, &pair.right_valid);
   return pair;
+}
+
+std::vector<std::size_t> NeighborsByDistance(const View& reference,
+                                             const std::vector<View>& neighbors) {
+  std::vector<std::size_t> order(neighbors.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return (neighbors[a].camera.center_world - reference.camera.center_world).norm() <
+           (neighbors[b].camera.center_world - reference.camera.center_world).norm();
+  });
+  return order;
 }
 
 }  // namespace gcpstereo::cost

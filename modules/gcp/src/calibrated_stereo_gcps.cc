@@ -121,12 +121,7 @@ CalibratedStereoGcpResult ExtractAtViewResolution(const View& reference,
   }
   const int num_pairs = std::min<int>(options.max_neighbors, static_cast<int>(neighbors.size()));
   // The nearest neighbours (camera centres; ties: list order).
-  std::vector<int> order(neighbors.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    return (neighbors[a].camera.center_world - reference.camera.center_world).norm() <
-           (neighbors[b].camera.center_world - reference.camera.center_world).norm();
-  });
+  const std::vector<std::size_t> order = cost::NeighborsByDistance(reference, neighbors);
   auto check_view = [](const View& view) {
     view.camera.Validate("view '" + view.name + "'");
     if (view.image.type() != CV_8UC3 || view.image.cols != view.camera.width ||

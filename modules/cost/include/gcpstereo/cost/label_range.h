@@ -31,9 +31,9 @@ struct LabelRangeOptions {
   // [labels.auto.min_neighbors]: a depth counts when at least this many neighbours see it.
   // Range: >= 1.
   int min_neighbors = 1;
-  // [labels.auto.max_depth]: upper bound of the frustum-overlap range, in the data set's depth unit
-  // (metres); +inf = unbounded (fine for inverse depth / disparity labels, where depth +inf is the
-  // value 0; depth labels then need labels.max). Range: > 0.
+  // [labels.auto.max_depth]: upper bound of the frustum-overlap and matched ranges, in the data
+  // set's depth unit (metres); +inf = unbounded (fine for inverse depth / disparity labels, where
+  // depth +inf is the value 0; depth labels then need labels.max). Range: > 0.
   double max_depth = std::numeric_limits<double>::infinity();
 
   // Throws ConfigError naming the YAML key of the first invalid field.

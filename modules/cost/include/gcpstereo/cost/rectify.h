@@ -1,6 +1,9 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 
+#include <cstddef>
+#include <vector>
+
 #include <Eigen/Core>
 #include <opencv2/core/mat.hpp>
 
@@ -30,5 +33,10 @@ struct RectifiedCalibratedPair {
 // C_n) (R = camera-to-world rotation). Images are remapped bilinearly (black outside the source).
 // Both views must have images of their cameras' size.
 RectifiedCalibratedPair RectifyCalibratedPair(const View& reference, const View& neighbor);
+
+// Indices of `neighbors` from the nearest to the reference to the farthest (distance of the camera
+// centres; ties: list order): the pairs to rectify first.
+std::vector<std::size_t> NeighborsByDistance(const View& reference,
+                                             const std::vector<View>& neighbors);
 
 }  // namespace gcpstereo::cost
