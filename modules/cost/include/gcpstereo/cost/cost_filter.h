@@ -51,8 +51,8 @@ struct CostFilterOptions {
 // rectified pair has no data, so the replacement is the border's cost); a row of R without any
 // data uses max_cost. Entries of `region` that have no data in `raw` stay without data. The
 // filtered cost is clamped to [0, raw.max_cost()] (the guided filter may overshoot) and quantised
-// like `raw` (same max_cost). Labels are filtered in parallel (TBB); each slice is filtered
-// sequentially in double precision, so the result does not depend on the thread count.
+// like `raw` (same max_cost). Labels are filtered in parallel (TBB, 8 labels a task); each slice is
+// filtered sequentially in double precision, so the result does not depend on the thread count.
 // Throws Error when `region` is not inside raw.region() or the guide does not contain raw.region().
 CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const cv::Rect& region,
                             const CostFilterOptions& options);
