@@ -188,6 +188,74 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
         std::vector<double> cost(n), mean_cost(n), result(n), work(n);
         std::vector<std::vector<double>> a(guided ? k : 0, std::vector<double>(n));
         std::vector<double> b(guided ? n : 0);
+        // One label's slice `in` (the raw entries, width × height) → its filtered and quantised
+        // entries over `region` in `slice_out`.
+        auto filter_slice = [&](const std::uint16_t* in, std::uint16_t* slice_out) {
+          // The slice, with entries without data replaced by the nearest entry of the row.
+          for (int y = 0; y < height; ++y) {
+            double* row = &cost[static_cast<std::size_t>(y) * width];
+            const std::uint16_t* in_row = in + static_cast<std::size_t>(y) * width;
+            int last = -1;
+            for (int x = 0; x < width; ++x) {
+              const std::uint16_t s = in_row[x];
+              if (s == CostVolume::kNoData) continue;
+              row[x] = s * step;
+              for (int f = last + 1; f < x; ++f) {
+                // Nearest: left when closer (ties to the left), else this entry.
+                row[f] = (last >= 0 && f - last <= x - f) ? row[last] : row[x];
+              }
+              last = x;
+            }
+            for (int f = last + 1; f < width; ++f) row[f] = last >= 0 ? row[last] : max_cost;
+          }
+          box(cost.data(), mean_cost.data());
+          if (!guided) {
+            result.swap(mean_cost);
+          } else {
+            std::array<std::vector<double>, 3> cov_ip;
+            for (int ch = 0; ch < k; ++ch) {
+              for (std::size_t p = 0; p < n; ++p) work[p] = image[ch][p] * cost[p];
+              cov_ip[ch].resize(n);
+              box(work.data(), cov_ip[ch].data());
+              for (std::size_t p = 0; p < n; ++p) {
+                cov_ip[ch][p] -= mean_image[ch][p] * mean_cost[p];
+              }
+            }
+            for (std::size_t p = 0; p < n; ++p) {
+              double bp = mean_cost[p];
+              if (k == 1) {
+                a[0][p] = inverse[0][p] * cov_ip[0][p];
+                bp -= a[0][p] * mean_image[0][p];
+              } else {
+                const double cx = cov_ip[0][p], cy = cov_ip[1][p], cz = cov_ip[2][p];
+                a[0][p] = inverse[0][p] * cx + inverse[1][p] * cy + inverse[2][p] * cz;
+                a[1][p] = inverse[1][p] * cx + inverse[3][p] * cy + inverse[4][p] * cz;
+                a[2][p] = inverse[2][p] * cx + inverse[4][p] * cy + inverse[5][p] * cz;
+                bp -= a[0][p] * mean_image[0][p] + a[1][p] * mean_image[1][p] +
+                      a[2][p] * mean_image[2][p];
+              }
+              b[p] = bp;
+            }
+            box(b.data(), result.data());
+            for (int ch = 0; ch < k; ++ch) {
+              box(a[ch].data(), work.data());
+              for (std::size_t p = 0; p < n; ++p) result[p] += work[p] * image[ch][p];
+            }
+          }
+          for (int r = 0; r < region.height; ++r) {
+            for (int c = 0; c < region.width; ++c) {
+              const std::size_t p = static_cast<std::size_t>(oy + r) * width + ox + c;
+              std::uint16_t& dst = slice_out[static_cast<std::size_t>(r) * region.width + c];
+              if (in[p] == CostVolume::kNoData) {
+                dst = CostVolume::kNoData;
+                continue;
+              }
+              dst = internal::Quantise(
+                  static_cast<float>(std::clamp(result[p], 0.0, static_cast<double>(max_cost))),
+                  inv_step);
+            }
+          }
+        };
         std::vector<std::uint16_t> in_slices(kChunk * n), out_slices(kChunk * region_n);
         for (int chunk = range.begin(); chunk != range.end(); ++chunk) {
           const int first = chunk * kChunk, count = std::min(kChunk, num_labels - first);
@@ -199,72 +267,7 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
             }
           }
           for (int j = 0; j < count; ++j) {
-            const std::uint16_t* in = &in_slices[j * n];
-            // The slice, with entries without data replaced by the nearest entry of the row.
-            for (int y = 0; y < height; ++y) {
-              double* row = &cost[static_cast<std::size_t>(y) * width];
-              const std::uint16_t* in_row = in + static_cast<std::size_t>(y) * width;
-              int last = -1;
-              for (int x = 0; x < width; ++x) {
-                const std::uint16_t s = in_row[x];
-                if (s == CostVolume::kNoData) continue;
-                row[x] = s * step;
-                for (int f = last + 1; f < x; ++f) {
-                  // Nearest: left when closer (ties to the left), else this entry.
-                  row[f] = (last >= 0 && f - last <= x - f) ? row[last] : row[x];
-                }
-                last = x;
-              }
-              for (int f = last + 1; f < width; ++f) row[f] = last >= 0 ? row[last] : max_cost;
-            }
-            box(cost.data(), mean_cost.data());
-            if (!guided) {
-              result.swap(mean_cost);
-            } else {
-              std::array<std::vector<double>, 3> cov_ip;
-              for (int ch = 0; ch < k; ++ch) {
-                for (std::size_t p = 0; p < n; ++p) work[p] = image[ch][p] * cost[p];
-                cov_ip[ch].resize(n);
-                box(work.data(), cov_ip[ch].data());
-                for (std::size_t p = 0; p < n; ++p) {
-                  cov_ip[ch][p] -= mean_image[ch][p] * mean_cost[p];
-                }
-              }
-              for (std::size_t p = 0; p < n; ++p) {
-                double bp = mean_cost[p];
-                if (k == 1) {
-                  a[0][p] = inverse[0][p] * cov_ip[0][p];
-                  bp -= a[0][p] * mean_image[0][p];
-                } else {
-                  const double cx = cov_ip[0][p], cy = cov_ip[1][p], cz = cov_ip[2][p];
-                  a[0][p] = inverse[0][p] * cx + inverse[1][p] * cy + inverse[2][p] * cz;
-                  a[1][p] = inverse[1][p] * cx + inverse[3][p] * cy + inverse[4][p] * cz;
-                  a[2][p] = inverse[2][p] * cx + inverse[4][p] * cy + inverse[5][p] * cz;
-                  bp -= a[0][p] * mean_image[0][p] + a[1][p] * mean_image[1][p] +
-                        a[2][p] * mean_image[2][p];
-                }
-                b[p] = bp;
-              }
-              box(b.data(), result.data());
-              for (int ch = 0; ch < k; ++ch) {
-                box(a[ch].data(), work.data());
-                for (std::size_t p = 0; p < n; ++p) result[p] += work[p] * image[ch][p];
-              }
-            }
-            std::uint16_t* slice_out = &out_slices[j * region_n];
-            for (int r = 0; r < region.height; ++r) {
-              for (int c = 0; c < region.width; ++c) {
-                const std::size_t p = static_cast<std::size_t>(oy + r) * width + ox + c;
-                std::uint16_t& dst = slice_out[static_cast<std::size_t>(r) * region.width + c];
-                if (in[p] == CostVolume::kNoData) {
-                  dst = CostVolume::kNoData;
-                  continue;
-                }
-                dst = internal::Quantise(
-                    static_cast<float>(std::clamp(result[p], 0.0, static_cast<double>(max_cost))),
-                    inv_step);
-              }
-            }
+            filter_slice(&in_slices[j * n], &out_slices[j * region_n]);
           }
           for (int r = 0; r < region.height; ++r) {
             for (int c = 0; c < region.width; ++c) {
