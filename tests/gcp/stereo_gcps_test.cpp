@@ -1,11 +1,13 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/gcp/stereo_gcps.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -79,6 +81,104 @@ TEST(StereoGcpsTest, SyntheticPairGivesCorrectSparseGcps) {
     EXPECT_DOUBLE_EQ(g.depth, 90.0 / d);
     EXPECT_DOUBLE_EQ(g.sigma, 90.0 * 0.5 / (d * d));
     EXPECT_EQ(g.source, GcpSource::kStereo);
+  }
+}
+
+// The adaptive-weight evidence against the Yoon–Kweon cost evaluated pixel by pixel and
+// disparity by disparity (CIELab weights of both windows, truncated RGB differences, the window
+// sampled every aw_stride_px): same WTA, same uniqueness, same parabola vertex, near the image
+// borders (where windows leave the image) and in the interior, for strides 1 and 2.
+TEST(StereoGcpsTest, AdaptiveWeightEvidenceIsThePerPixelFormula) {
+  std::mt19937 rng(23);
+  std::uniform_int_distribution<int> value(0, 255);
+  cv::Mat small(6, 9, CV_8UC3), left, right;
+  for (auto it = small.begin<cv::Vec3b>(); it != small.end<cv::Vec3b>(); ++it) {
+    *it = cv::Vec3b(value(rng), value(rng), value(rng));
+  }
+  cv::resize(small, left, cv::Size(29, 17), 0, 0, cv::INTER_LINEAR);
+  cv::Mat noise(left.size(), CV_8UC3);
+  cv::randu(noise, 0, 12);
+  right = cv::Mat(left.size(), CV_8UC3);
+  for (int y = 0; y < left.rows; ++y) {  // right(x) = left(x + 3) + noise
+    for (int x = 0; x < left.cols; ++x) {
+      right.at<cv::Vec3b>(y, x) = left.at<cv::Vec3b>(y, std::min(left.cols - 1, x + 3));
+    }
+  }
+  right += noise;
+  const int dmin = 0, dmax = 6;
+  auto lab = [](const cv::Mat& bgr) {
+    cv::Mat f, out;
+    bgr.convertTo(f, CV_32FC3, 1.0 / 255.0);
+    cv::cvtColor(f, out, cv::COLOR_BGR2Lab);
+    return out;
+  };
+  const cv::Mat lab_l = lab(left), lab_r = lab(right);
+  for (const int stride : {1, 2}) {
+    StereoGcpOptions options;
+    options.aw_window_px = 9;
+    options.aw_stride_px = stride;
+    const StereoPairEvidence evidence = ComputeStereoEvidence(left, right, dmin, dmax, options);
+    const StereoViewEvidence& e = evidence.left;
+    const int radius = 4, reach = (radius / stride) * stride;
+    auto weight = [&](const cv::Mat& image_lab, int y, int x, int dy, int dx) -> float {
+      const int qy = y + dy, qx = x + dx;
+      if (qy < 0 || qx < 0 || qy >= image_lab.rows || qx >= image_lab.cols) return 0.0f;
+      const cv::Vec3f diff = image_lab.at<cv::Vec3f>(qy, qx) - image_lab.at<cv::Vec3f>(y, x);
+      return std::exp(-std::sqrt(diff.dot(diff)) * static_cast<float>(1.0 / options.aw_gamma_c)) *
+             static_cast<float>(std::exp(-std::hypot(dx, dy) / options.aw_gamma_p));
+    };
+    int compared = 0;
+    for (int y = 0; y < left.rows; ++y) {
+      for (int x = 0; x < left.cols; ++x) {
+        std::vector<double> cost;
+        std::vector<int> disparity;
+        for (int d = dmin; d <= dmax; ++d) {
+          if (x - d < 0) continue;
+          double numerator = 0.0, denominator = 0.0;
+          for (int dy = -reach; dy <= radius; dy += stride) {
+            for (int dx = -reach; dx <= radius; dx += stride) {
+              const float w = weight(lab_l, y, x, dy, dx) * weight(lab_r, y, x - d, dy, dx);
+              if (w == 0.0f) continue;
+              const int qy = y + dy, qx = x + dx;
+              float diff = -1.0f;  // the target pixel qx − d is outside the image
+              if (qx - d >= 0) {
+                const cv::Vec3b a = left.at<cv::Vec3b>(qy, qx), b = right.at<cv::Vec3b>(qy, qx - d);
+                diff = std::min(static_cast<float>(std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) +
+                                                   std::abs(a[2] - b[2])),
+                                static_cast<float>(options.aw_truncation));
+              }
+              numerator += w * diff;
+              denominator += w;
+            }
+          }
+          if (denominator <= 0.0) continue;
+          cost.push_back(numerator / denominator);
+          disparity.push_back(d);
+        }
+        ASSERT_FALSE(cost.empty());
+        const int best =
+            static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+        EXPECT_EQ(e.wta_aw.at<int>(y, x), disparity[best])
+            << "stride " << stride << " at " << x << "," << y;
+        double second = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < cost.size(); ++i) {
+          if (std::abs(disparity[i] - disparity[best]) > 1) second = std::min(second, cost[i]);
+        }
+        const double u =
+            std::isfinite(second) && second > 0.0 ? (second - cost[best]) / second : 0.0;
+        EXPECT_NEAR(e.uniqueness_aw.at<float>(y, x), u, 1e-6) << "at " << x << "," << y;
+        if (best > 0 && best + 1 < static_cast<int>(cost.size()) &&
+            cost[best - 1] - 2.0 * cost[best] + cost[best + 1] > 0.0) {
+          const double vertex =
+              disparity[best] + std::clamp(0.5 * (cost[best - 1] - cost[best + 1]) /
+                                               (cost[best - 1] - 2.0 * cost[best] + cost[best + 1]),
+                                           -0.5, 0.5);
+          EXPECT_NEAR(e.subpixel_aw.at<float>(y, x), vertex, 1e-5) << "at " << x << "," << y;
+        }
+        ++compared;
+      }
+    }
+    EXPECT_EQ(compared, left.rows * left.cols);
   }
 }
 

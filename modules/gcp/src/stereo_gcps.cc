@@ -183,15 +183,36 @@ void WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int
   const int num_d = dmax - dmin + 1;
   const cv::Mat ref_lab = ToLab(ref);
   const cv::Mat tgt_lab = ToLab(target);
-  // Truncated absolute differences e(q, q − d), one float image per disparity (−1 = invalid).
+  struct Offset {
+    int dy, dx;
+    float spatial;  // exp(−‖Δp‖ / γ_p)
+  };
+  std::vector<Offset> offsets;
+  const int radius = options.aw_window_px / 2;
+  const int stride = options.aw_stride_px;
+  const int reach = (radius / stride) * stride;  // the largest |dy| and |dx| of the window
+  for (int dy = -reach; dy <= radius; dy += stride) {
+    for (int dx = -reach; dx <= radius; dx += stride) {
+      offsets.push_back(
+          {dy, dx, static_cast<float>(std::exp(-std::hypot(dx, dy) / options.aw_gamma_p))});
+    }
+  }
+  const int num_k = static_cast<int>(offsets.size());
+  const float inv_gamma_c = static_cast<float>(1.0 / options.aw_gamma_c);
+
+  // Truncated absolute differences e(q, q − d), one float image per disparity (−1 = invalid),
+  // with a border of `reach` zeros: a window reaching outside the image reads a zero there, which
+  // its zero weight cancels, so the aggregation below needs no bounds test.
+  const int padded_width = width + 2 * reach;
   std::vector<cv::Mat> tad(num_d);
   for (int i = 0; i < num_d; ++i) {
     const int d = dmin + i;
-    tad[i] = cv::Mat(ref.size(), CV_32F, cv::Scalar(-1.0f));
+    tad[i] = cv::Mat(height + 2 * reach, padded_width, CV_32F, cv::Scalar(0.0f));
+    tad[i](cv::Rect(reach, reach, width, height)).setTo(-1.0f);
     for (int y = 0; y < height; ++y) {
       const cv::Vec3b* r = ref.ptr<cv::Vec3b>(y);
       const cv::Vec3b* t = target.ptr<cv::Vec3b>(y);
-      float* out = tad[i].ptr<float>(y);
+      float* out = tad[i].ptr<float>(y + reach) + reach;
       for (int x = std::max(0, d); x < std::min(width, width + d); ++x) {
         const int xt = x - d;
         const float e =
@@ -201,28 +222,17 @@ void WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int
       }
     }
   }
-  struct Offset {
-    int dy, dx;
-    float spatial;  // exp(−‖Δp‖ / γ_p)
-  };
-  std::vector<Offset> offsets;
-  const int radius = options.aw_window_px / 2;
-  const int stride = options.aw_stride_px;
-  for (int dy = -(radius / stride) * stride; dy <= radius; dy += stride) {
-    for (int dx = -(radius / stride) * stride; dx <= radius; dx += stride) {
-      offsets.push_back(
-          {dy, dx, static_cast<float>(std::exp(-std::hypot(dx, dy) / options.aw_gamma_p))});
-    }
-  }
-  const int num_k = static_cast<int>(offsets.size());
-  const float inv_gamma_c = static_cast<float>(1.0 / options.aw_gamma_c);
 
   cv::Mat wta(ref.size(), CV_32S, cv::Scalar(-1));
   *uniqueness = cv::Mat(ref.size(), CV_32F, cv::Scalar(0.0f));
   *subpixel = cv::Mat(ref.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-    std::vector<float> w_ref(static_cast<size_t>(width) * num_k);
-    std::vector<float> w_tgt(static_cast<size_t>(width) * num_k);
+    // Support weights of a row, offset-major (w[k · width + x]): for one disparity and offset
+    // the pixels of the row are consecutive in the weights of both images and in the differences,
+    // so the innermost loop runs along the row (and vectorises). Each pixel's sums still add the
+    // offsets in the same order, so the costs are those of the per-pixel formula bit for bit.
+    std::vector<float> w_ref(static_cast<size_t>(num_k) * width);
+    std::vector<float> w_tgt(static_cast<size_t>(num_k) * width);
     auto support = [&](const cv::Mat& lab, int y, std::vector<float>* weights) {
       for (int x = 0; x < width; ++x) {
         const cv::Vec3f& centre = lab.at<cv::Vec3f>(y, x);
@@ -234,42 +244,56 @@ void WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int
             const cv::Vec3f diff = lab.at<cv::Vec3f>(qy, qx) - centre;
             w = std::exp(-std::sqrt(diff.dot(diff)) * inv_gamma_c) * offsets[k].spatial;
           }
-          (*weights)[static_cast<size_t>(x) * num_k + k] = w;
+          (*weights)[static_cast<size_t>(k) * width + x] = w;
         }
       }
     };
+    std::vector<double> numerator(width), denominator(width);
+    std::vector<double> costs(static_cast<size_t>(num_d) * width);  // costs[i · width + x]
+    std::unique_ptr<bool[]> has_cost(new bool[static_cast<size_t>(num_d) * width]);
     std::vector<double> curve(num_d);
     std::unique_ptr<bool[]> valid(new bool[num_d]);
     for (int y = rows.begin(); y < rows.end(); ++y) {
       support(ref_lab, y, &w_ref);
       support(tgt_lab, y, &w_tgt);
+      for (int i = 0; i < num_d; ++i) {
+        const int d = dmin + i;
+        // Pixels whose match x − d lies in the target image.
+        const int lo = std::max(0, d), hi = std::min(width, width + d);
+        std::fill(numerator.begin(), numerator.end(), 0.0);
+        std::fill(denominator.begin(), denominator.end(), 0.0);
+        for (int k = 0; k < num_k; ++k) {
+          const float* wr = &w_ref[static_cast<size_t>(k) * width];
+          const float* wt = &w_tgt[static_cast<size_t>(k) * width] - d;  // wt[x] = w(x − d)
+          const float* e = tad[i].ptr<float>(y + reach + offsets[k].dy) + reach + offsets[k].dx;
+          double* num = numerator.data();
+          double* den = denominator.data();
+          for (int x = lo; x < hi; ++x) {
+            const float w = wr[x] * wt[x];  // 0 when q or q̄ is outside its image
+            num[x] += w * e[x];
+            den[x] += w;
+          }
+        }
+        double* cost_row = &costs[static_cast<size_t>(i) * width];
+        bool* has_row = &has_cost[static_cast<size_t>(i) * width];
+        for (int x = 0; x < width; ++x) {
+          has_row[x] = x >= lo && x < hi && denominator[x] > 0.0;
+          if (has_row[x]) cost_row[x] = numerator[x] / denominator[x];
+        }
+      }
       int* out = wta.ptr<int>(y);
       for (int x = 0; x < width; ++x) {
-        const float* wr = &w_ref[static_cast<size_t>(x) * num_k];
         double best = std::numeric_limits<double>::infinity();
         int best_i = -1;
         for (int i = 0; i < num_d; ++i) {
-          const int d = dmin + i;
-          const int xt = x - d;
-          valid[i] = false;
-          if (xt < 0 || xt >= width) continue;
-          const float* wt = &w_tgt[static_cast<size_t>(xt) * num_k];
-          double numerator = 0.0, denominator = 0.0;
-          for (int k = 0; k < num_k; ++k) {
-            const float w = wr[k] * wt[k];  // 0 when q or q̄ is outside its image
-            if (w == 0.0f) continue;
-            const float e = tad[i].at<float>(y + offsets[k].dy, x + offsets[k].dx);
-            numerator += w * e;
-            denominator += w;
-          }
-          if (denominator <= 0.0) continue;
-          const double cost = numerator / denominator;
-          valid[i] = true;
+          valid[i] = has_cost[static_cast<size_t>(i) * width + x];
+          if (!valid[i]) continue;
+          const double cost = costs[static_cast<size_t>(i) * width + x];
           curve[i] = cost;
           if (cost < best) {
             best = cost;
             best_i = i;
-            out[x] = d;
+            out[x] = dmin + i;
           }
         }
         if (best_i >= 0) {
