@@ -264,12 +264,12 @@ void WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int
         std::fill(denominator.begin(), denominator.end(), 0.0);
         for (int k = 0; k < num_k; ++k) {
           const float* wr = &w_ref[static_cast<size_t>(k) * width];
-          const float* wt = &w_tgt[static_cast<size_t>(k) * width] - d;  // wt[x] = w(x − d)
+          const float* wt = &w_tgt[static_cast<size_t>(k) * width];
           const float* e = tad[i].ptr<float>(y + reach + offsets[k].dy) + reach + offsets[k].dx;
           double* num = numerator.data();
           double* den = denominator.data();
           for (int x = lo; x < hi; ++x) {
-            const float w = wr[x] * wt[x];  // 0 when q or q̄ is outside its image
+            const float w = wr[x] * wt[x - d];  // 0 when q or q̄ is outside its image
             num[x] += w * e[x];
             den[x] += w;
           }
