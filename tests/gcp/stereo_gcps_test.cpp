@@ -97,7 +97,7 @@ TEST(StereoGcpsTest, AdaptiveWeightEvidenceIsThePerPixelFormula) {
   }
   cv::resize(small, left, cv::Size(29, 17), 0, 0, cv::INTER_LINEAR);
   cv::Mat noise(left.size(), CV_8UC3);
-  cv::randu(noise, 0, 12);
+  cv::RNG(29).fill(noise, cv::RNG::UNIFORM, 0, 12);  // its own seed: not the global RNG's state
   right = cv::Mat(left.size(), CV_8UC3);
   for (int y = 0; y < left.rows; ++y) {  // right(x) = left(x + 3) + noise
     for (int x = 0; x < left.cols; ++x) {
