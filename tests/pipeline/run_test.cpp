@@ -295,7 +295,7 @@ TEST_F(TinyScene, LeftRightCheckNeedsARectifiedPair) {
 
 // Planes are fitted in disparity: only for rectified data.
 TEST_F(TinyScene, PlaneFitNeedsRectifiedData) {
-  ExpectRunFails<ConfigError>("optimizer.plane_fit=true", "planes");
+  ExpectRunFails<ConfigError>("optimizer.plane_fit=true", "plane_fit");
 }
 
 // The shipped configs/<config_name> with `overrides` (after `base`), run into `out`.
