@@ -257,6 +257,23 @@ void WarnOfLabelsAtTheRangeEnds(const cv::Mat& label_map, const LabelSpace& labe
   }
 }
 
+// The GCP sources' input files exist before the data set is loaded: a wrong path stops the run at
+// once and names its key (a `--set dataset.path=…` override does not move the other paths).
+void CheckGcpInputFilesExist(const PipelineConfig& options) {
+  const auto& sources = options.gcp.sources;
+  auto check = [&](const char* source, const char* key, const std::string& path) {
+    std::error_code ec;
+    if (std::find(sources.begin(), sources.end(), source) == sources.end() ||
+        std::filesystem::is_regular_file(path, ec)) {
+      return;
+    }
+    throw IoError(path, std::string("file not found (") + key +
+                            "; a relative path is relative to the working directory)");
+  };
+  check("lidar", "gcp.lidar.path", options.gcp.lidar_path);
+  check("depth_map", "gcp.depth_map.path", options.gcp.depth_map.path);
+}
+
 // KITTI raw: gcp.lidar.path is velodyne_points/data/NNNNNNNNNN.bin of one frame, and nothing ties
 // it to dataset.reference, so a config edited for another frame (or a --set of one key but not
 // the other) would take its GCPs from a scan of another moment of the drive. Warns when the scan's
@@ -304,6 +321,7 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
   stages = json::object();
 
   // 1. Load the data set.
+  CheckGcpInputFilesExist(options);
   StageClock load_clock(&stages, "load");
   io::DatasetRequest request;
   request.format = options.dataset.format;

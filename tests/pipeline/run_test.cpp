@@ -288,6 +288,22 @@ TEST_F(TinyScene, BadReferenceNameFailsWithoutOutputs) {
   ExpectRunFails<Error>("dataset.reference=0099", "bad");
 }
 
+// A GCP file that is not there stops the run before the data set is loaded, naming its key.
+TEST_F(TinyScene, MissingGcpFileNamesItsKey) {
+  ExpectRunFails<IoError>("gcp.lidar.path=" + *dir_ + "/no/laser.ply", "no_scan");
+  LoadedConfig config;
+  std::vector<std::string> overrides = Overrides();
+  overrides.insert(overrides.end(), {"gcp.sources=[depth_map]", "gcp.depth_map.path=none.pfm"});
+  config.Load("", overrides);
+  try {
+    RunPipeline(config, *dir_ + "/no_depth", "(test)");
+    ADD_FAILURE() << "no error";
+  } catch (const IoError& e) {
+    EXPECT_EQ(e.path(), "none.pfm");
+    EXPECT_NE(std::string(e.what()).find("gcp.depth_map.path"), std::string::npos) << e.what();
+  }
+}
+
 // The left-right check solves the pair again from the neighbour: only for rectified pairs.
 TEST_F(TinyScene, LeftRightCheckNeedsARectifiedPair) {
   ExpectRunFails<ConfigError>("optimizer.left_right_check=true", "lr");
