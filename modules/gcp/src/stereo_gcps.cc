@@ -175,6 +175,24 @@ cv::Mat ToLab(const cv::Mat& bgr) {
   return lab;
 }
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#define GCPSTEREO_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define GCPSTEREO_AVX2_CLONE
+#endif
+
+// One window offset of one disparity, along `count` pixels of a row: w = wr[j] · wt[j],
+// num[j] += w · e[j], den[j] += w. Compiled twice on x86-64, the AVX2 copy chosen when the CPU has
+// it: both do the same float product and double sums per element, so they give the same bits.
+GCPSTEREO_AVX2_CLONE void AccumulateOffset(const float* wr, const float* wt, const float* e,
+                                           double* num, double* den, int count) {
+  for (int j = 0; j < count; ++j) {
+    const float w = wr[j] * wt[j];  // 0 when q or q̄ is outside its image
+    num[j] += w * e[j];
+    den[j] += w;
+  }
+}
+
 void WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax,
                         const StereoGcpOptions& options, cv::Mat* wta_out, cv::Mat* uniqueness,
                         cv::Mat* subpixel) {
@@ -262,17 +280,13 @@ void WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int
         const int lo = std::max(0, d), hi = std::min(width, width + d);
         std::fill(numerator.begin(), numerator.end(), 0.0);
         std::fill(denominator.begin(), denominator.end(), 0.0);
-        for (int k = 0; k < num_k; ++k) {
-          const float* wr = &w_ref[static_cast<size_t>(k) * width];
-          const float* wt = &w_tgt[static_cast<size_t>(k) * width];
-          const float* e = tad[i].ptr<float>(y + reach + offsets[k].dy) + reach + offsets[k].dx;
-          double* num = numerator.data();
-          double* den = denominator.data();
-          for (int x = lo; x < hi; ++x) {
-            const float w = wr[x] * wt[x - d];  // 0 when q or q̄ is outside its image
-            num[x] += w * e[x];
-            den[x] += w;
-          }
+        for (int k = 0; k < num_k && lo < hi; ++k) {
+          // Pixel x of the row against target pixel x − d, for x in [lo, hi).
+          AccumulateOffset(
+              &w_ref[static_cast<size_t>(k) * width + lo],
+              &w_tgt[static_cast<size_t>(k) * width + lo - d],
+              tad[i].ptr<float>(y + reach + offsets[k].dy) + reach + offsets[k].dx + lo,
+              &numerator[lo], &denominator[lo], hi - lo);
         }
         double* cost_row = &costs[static_cast<size_t>(i) * width];
         bool* has_row = &has_cost[static_cast<size_t>(i) * width];
