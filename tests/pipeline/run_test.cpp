@@ -293,13 +293,14 @@ TEST_F(TinyScene, MissingGcpFileNamesItsKey) {
   ExpectRunFails<IoError>("gcp.lidar.path=" + *dir_ + "/no/laser.ply", "no_scan");
   LoadedConfig config;
   std::vector<std::string> overrides = Overrides();
-  overrides.insert(overrides.end(), {"gcp.sources=[depth_map]", "gcp.depth_map.path=none.pfm"});
+  const std::string missing = *dir_ + "/no/depth.pfm";
+  overrides.insert(overrides.end(), {"gcp.sources=[depth_map]", "gcp.depth_map.path=" + missing});
   config.Load("", overrides);
   try {
     RunPipeline(config, *dir_ + "/no_depth", "(test)");
     ADD_FAILURE() << "no error";
   } catch (const IoError& e) {
-    EXPECT_EQ(e.path(), "none.pfm");
+    EXPECT_EQ(e.path(), missing);
     EXPECT_NE(std::string(e.what()).find("gcp.depth_map.path"), std::string::npos) << e.what();
   }
 }
