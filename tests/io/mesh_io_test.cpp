@@ -4,8 +4,11 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <random>
+#include <sstream>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -91,6 +94,66 @@ TEST(MeshIo, ObjRoundTripKeepsPositionsAndColors) {
       EXPECT_EQ(back.vertices[back.faces[f][k]], mesh.vertices[mesh.faces[f][k]]) << f << " " << k;
     }
   }
+}
+
+// OBJ positions are text: every float must come back as the same float through assimp's reader,
+// also for values with no short decimal (random positions, not the grid's multiples of 1/8).
+TEST(MeshIo, ObjKeepsArbitraryFloatsAndWritesNormals) {
+  const std::string dir = testing::MakeTempDir("io-mesh");
+  TriangleMesh mesh;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+  const int cols = 40, rows = 30;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const float z = 5.0f + 3.0f * uniform(rng);
+      mesh.vertices.emplace_back((c - 20) * z / 1500.0f, (r - 15) * z / 1500.0f, z);
+    }
+  }
+  for (int r = 0; r + 1 < rows; ++r) {
+    for (int c = 0; c + 1 < cols; ++c) {
+      const int i = r * cols + c;
+      mesh.faces.emplace_back(i, i + cols, i + 1);
+      mesh.faces.emplace_back(i + 1, i + cols, i + cols + 1);
+    }
+  }
+  std::vector<Eigen::Vector3f> normals(mesh.vertices.size());
+  for (Eigen::Vector3f& n : normals) n = Eigen::Vector3f(uniform(rng), uniform(rng), 1.0f).normalized();
+  WriteMeshObj(dir + "/random.obj", mesh, normals);
+
+  const TriangleMesh back = ReadMeshPly(dir + "/random.obj");
+  ASSERT_EQ(back.faces.size(), mesh.faces.size());
+  int mismatches = 0;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      mismatches += back.vertices[back.faces[f][k]] != mesh.vertices[mesh.faces[f][k]];
+    }
+  }
+  EXPECT_EQ(mismatches, 0);
+
+  // One `vn` line per vertex, in order, and faces that name the vertex's own normal.
+  std::ifstream in(dir + "/random.obj");
+  std::string line;
+  std::vector<Eigen::Vector3f> read_normals;
+  std::string first_face;
+  while (std::getline(in, line)) {
+    if (line.rfind("vn ", 0) == 0) {
+      std::istringstream fields(line.substr(3));
+      Eigen::Vector3f n;
+      fields >> n.x() >> n.y() >> n.z();
+      read_normals.push_back(n);
+    } else if (first_face.empty() && line.rfind("f ", 0) == 0) {
+      first_face = line;
+    }
+  }
+  ASSERT_EQ(read_normals.size(), normals.size());
+  for (size_t v = 0; v < normals.size(); ++v) EXPECT_EQ(read_normals[v], normals[v]) << v;
+  EXPECT_EQ(first_face, "f 1//1 41//41 2//2");
+
+  // A normal count that does not match the vertices is refused, and nothing is written.
+  normals.pop_back();
+  EXPECT_THROW(WriteMeshObj(dir + "/short.obj", mesh, normals), IoError);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/short.obj"));
 }
 
 TEST(MeshIo, MeshWithoutColors) {

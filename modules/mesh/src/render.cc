@@ -32,6 +32,7 @@
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/system.h"
+#include "gcpstereo/mesh/meshing.h"
 
 namespace gcpstereo::mesh {
 namespace {
@@ -207,52 +208,6 @@ std::vector<CameraVertex> TransformVertices(const TriangleMesh& mesh, const Came
                       }
                     });
   return out;
-}
-
-// The angle atan2(y, x) in [0, π] for y >= 0, to about 1e-5 rad (a minimax polynomial for atan
-// on [−1, 1]; std::atan2 made the vertex normals the slowest part of a rendering).
-double AngleOf(double y, double x) {
-  const auto atan_unit = [](double t) {  // |t| <= 1
-    const double t2 = t * t;
-    return t *
-           (0.99997726 +
-            t2 * (-0.33262347 +
-                  t2 * (0.19354346 + t2 * (-0.11643287 + t2 * (0.05265332 - t2 * 0.01172120)))));
-  };
-  if (y == 0.0 && x == 0.0) return 0.0;
-  if (std::abs(x) >= y) {
-    const double a = atan_unit(y / std::abs(x));
-    return x > 0.0 ? a : kPi - a;
-  }
-  return 0.5 * kPi - atan_unit(x / y);
-}
-
-// Vertex normals in the world frame: the unit face normals around each vertex weighted by the
-// face's angle at the vertex (Thürmer & Wüthrich 1998; unlike area weights, independent of how a
-// surface is split into triangles). Unit; zero for a vertex of degenerate faces only.
-std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh) {
-  std::vector<Eigen::Vector3d> sum(mesh.vertices.size(), Eigen::Vector3d::Zero());
-  for (const Eigen::Vector3i& face : mesh.faces) {
-    const Eigen::Vector3d p[3] = {mesh.vertices[face[0]].cast<double>(),
-                                  mesh.vertices[face[1]].cast<double>(),
-                                  mesh.vertices[face[2]].cast<double>()};
-    const Eigen::Vector3d normal = (p[1] - p[0]).cross(p[2] - p[0]);
-    const double norm = normal.norm();
-    if (!(norm > 0.0)) continue;
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d e1 = p[(k + 1) % 3] - p[k];
-      const Eigen::Vector3d e2 = p[(k + 2) % 3] - p[k];
-      const double angle = AngleOf(norm, e1.dot(e2));  // |e1 × e2| = |normal| for every corner
-      sum[face[k]] += (angle / norm) * normal;
-    }
-  }
-  std::vector<Eigen::Vector3f> normals(sum.size());
-  for (size_t i = 0; i < sum.size(); ++i) {
-    const double norm = sum[i].norm();
-    normals[i] =
-        norm > 0.0 ? Eigen::Vector3f((sum[i] / norm).cast<float>()) : Eigen::Vector3f::Zero();
-  }
-  return normals;
 }
 
 // A triangle made by clipping a face: its projected corners and the face it belongs to.

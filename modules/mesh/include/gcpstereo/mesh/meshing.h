@@ -3,7 +3,9 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
+#include <Eigen/Core>
 #include <opencv2/core/mat.hpp>
 
 #include "gcpstereo/core/types.h"
@@ -98,5 +100,11 @@ PointCloud PointCloudFromDepthMap(const cv::Mat& depth, const Camera& camera, in
 // as a coloured point cloud that MeshLab and CloudCompare read). image_bgr as in MeshFromDepthMap.
 TriangleMesh ColoredPointsFromDepthMap(const cv::Mat& depth, const cv::Mat& image_bgr,
                                        const Camera& camera, int stride_px = 1);
+
+// Unit vertex normals in the mesh's frame, one per vertex: the face normals around each vertex
+// weighted by the face's angle at that vertex (Thürmer & Wüthrich 1998; unlike area weights,
+// independent of how a surface is split into triangles). Zero for a vertex that only degenerate
+// faces (or none) use. Used for the renderer's smooth shading and the OBJ export's normals.
+std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh);
 
 }  // namespace gcpstereo::mesh
