@@ -295,5 +295,37 @@ TEST(LabelRange, RectifiedPairRangeSpansMatchesAndGcps) {
   EXPECT_NEAR(s.max(), 15.0 * 1.1, 1e-9);
 }
 
+// A run builds its label space twice on the same views (provisionally for the stereo GCPs' search,
+// then finally): the matched range is computed on the first call and reused on the second.
+TEST(LabelRange, MatchedRangeIsComputedOnceWithACache) {
+  const auto [left, right] = ShiftedPair(320, 6, 40);
+  const View ref{"r", left, RectifiedSequenceCamera(100, 160, 60, 0.3, 0, 320, 120)};
+  const std::vector<View> nbs = {
+      View{"n", right, RectifiedSequenceCamera(100, 160, 60, 0.3, 1, 320, 120)}};
+  const auto matched = DepthRangeFromMatching(ref, nbs, true);
+  ASSERT_TRUE(matched.has_value());
+  MatchedDepthRange cache;
+  LabelRangeSummary summary;
+  const LabelSpace first = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt,
+                                          std::nullopt, GcpSet{}, ref, nbs, 30.0, true, {},
+                                          &summary, &cache);
+  EXPECT_TRUE(cache.computed);
+  ASSERT_TRUE(cache.depths.has_value());
+  EXPECT_EQ(*cache.depths, *matched);
+  // The second call takes the cached range and does not match again: a cache holding another
+  // range (as if other images had been matched) gives that range.
+  cache.depths = std::make_pair(matched->first * 2.0, matched->second);
+  const LabelSpace second = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt,
+                                           std::nullopt, GcpSet{}, ref, nbs, 30.0, true, {},
+                                           &summary, &cache);
+  EXPECT_EQ(summary.source, "matching");
+  EXPECT_NEAR(second.max(), first.max() / 2.0, 1e-9);
+  // A cached "nothing matched" is kept as well: the range falls back as without matches.
+  cache.depths.reset();
+  MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt,
+                 Gcps({5.0, 2.0}, GcpSource::kStereo), ref, nbs, 30.0, true, {}, &summary, &cache);
+  EXPECT_EQ(summary.source, "gcps");
+}
+
 }  // namespace
 }  // namespace gcpstereo::cost

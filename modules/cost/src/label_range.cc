@@ -278,7 +278,7 @@ LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::op
                           std::optional<double> max, const GcpSet& gcps, const View& reference,
                           const std::vector<View>& neighbors, double disparity_numerator,
                           bool rectified_pair, const LabelRangeOptions& options,
-                          LabelRangeSummary* summary) {
+                          LabelRangeSummary* summary, MatchedDepthRange* matched_cache) {
   LabelRangeSummary info;
   info.source = "config";
   if (!min || !max) {
@@ -290,7 +290,14 @@ LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::op
     const bool measured = std::any_of(gcps.points.begin(), gcps.points.end(),
                                       [](const Gcp& g) { return g.source != GcpSource::kStereo; });
     std::optional<std::pair<double, double>> matched;
-    if (!measured) matched = DepthRangeFromMatching(reference, neighbors, rectified_pair);
+    if (!measured) {
+      if (matched_cache != nullptr && matched_cache->computed) {
+        matched = matched_cache->depths;
+      } else {
+        matched = DepthRangeFromMatching(reference, neighbors, rectified_pair);
+        if (matched_cache != nullptr) *matched_cache = {true, matched};
+      }
+    }
     if (!gcps.empty()) {
       depth_range = DepthRangeFromGcps(gcps, options.gcp_low_percentile,
                                        options.gcp_high_percentile, options.margin);

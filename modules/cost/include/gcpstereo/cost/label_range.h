@@ -92,6 +92,14 @@ struct LabelRangeSummary {
   double depth_max = 0.0;
 };
 
+// The result of DepthRangeFromMatching kept between calls of MakeLabelSpace on the same views (a
+// run builds a provisional label space for the stereo GCPs' search and then the final one; the
+// images, and so the matched range, are the same both times).
+struct MatchedDepthRange {
+  bool computed = false;
+  std::optional<std::pair<double, double>> depths;
+};
+
 // Builds the label space of the run (configuration keys labels.space, labels.count, labels.min,
 // labels.max): `count` labels equally spaced in `kind` between min and max (in the space's unit;
 // disparity in the data set's GT convention, disparity = disparity_numerator / depth).
@@ -110,11 +118,13 @@ struct LabelRangeSummary {
 // without a label of any data (Rocks1, labels 17…61 against 0…61: bad-1 all 10.61 % against
 // 4.72 %). Without `count` (labels.count auto) there is one label per pixel of disparity: the
 // automatic bounds are rounded outward to whole pixels and count = ⌈max − min⌉ + 1; other spaces
-// need a count.
+// need a count. `matched_cache` (optional): the views' matched range is taken from it when it has
+// been computed, and stored in it otherwise; pass the same one only for the same views.
 LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::optional<double> min,
                           std::optional<double> max, const GcpSet& gcps, const View& reference,
                           const std::vector<View>& neighbors, double disparity_numerator,
                           bool rectified_pair, const LabelRangeOptions& options = {},
-                          LabelRangeSummary* summary = nullptr);
+                          LabelRangeSummary* summary = nullptr,
+                          MatchedDepthRange* matched_cache = nullptr);
 
 }  // namespace gcpstereo::cost
