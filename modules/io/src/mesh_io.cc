@@ -9,10 +9,10 @@
 //   MeshLab and CloudCompare read.
 // - OBJ: assimp's "objnomtl" export is correct but slow. It always runs its smooth-normal step (a
 //   spatial sort of every vertex) and then deduplicates positions, colours and normals through
-//   std::map: 16–24 s for the 1.6 M vertices and 3.1 M faces of a fountain-size depth map, which
+//   std::map: 16–24 s for the 1.6 M vertices and 3 M faces of a fountain-size depth map, which
 //   was the longest wait of a whole fountain run after the graph cuts. OBJ is line-based text, so
 //   it is written directly with std::to_chars (9 significant digits, no locale): the same
-//   `v x y z r g b` / `vn` / `f a//a b//b c//c` lines, in a tenth of the time.
+//   `v x y z r g b` / `vn` / `f a//a b//b c//c` lines, in 2–3 s.
 #include "gcpstereo/io/mesh_io.h"
 
 #include <algorithm>
