@@ -417,10 +417,10 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
   // then. The views' matched range is computed once for both label spaces.
   cost::MatchedDepthRange matched_range;
   const internal::ProvisionalLabels provisional = [&](const GcpSet& other_gcps) {
-    return cost::MakeLabelSpace(kind, options.labels.count, options.labels.min,
-                                options.labels.max, other_gcps, reference, dataset.neighbors,
-                                dataset.disparity_numerator, dataset.rectified,
-                                options.label_range, nullptr, &matched_range);
+    return cost::MakeLabelSpace(kind, options.labels.count, options.labels.min, options.labels.max,
+                                other_gcps, reference, dataset.neighbors,
+                                dataset.disparity_numerator, dataset.rectified, options.label_range,
+                                nullptr, &matched_range);
   };
   internal::GcpStageResult gcp_stage = internal::RunGcpStage(options, dataset, provisional);
   const GcpSet& gcps = gcp_stage.gcps;
@@ -431,8 +431,7 @@ RunSummary RunInFolder(const LoadedConfig& config, OutputFolder& out,
   const LabelSpace labels =
       cost::MakeLabelSpace(kind, options.labels.count, options.labels.min, options.labels.max, gcps,
                            reference, dataset.neighbors, dataset.disparity_numerator,
-                           dataset.rectified, options.label_range, &range_summary,
-                           &matched_range);
+                           dataset.rectified, options.label_range, &range_summary, &matched_range);
   report["labels"] = {{"space", LabelSpaceKindName(labels.kind())},
                       {"count", labels.count()},
                       {"min", labels.min()},

@@ -306,18 +306,18 @@ TEST(LabelRange, MatchedRangeIsComputedOnceWithACache) {
   ASSERT_TRUE(matched.has_value());
   MatchedDepthRange cache;
   LabelRangeSummary summary;
-  const LabelSpace first = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt,
-                                          std::nullopt, GcpSet{}, ref, nbs, 30.0, true, {},
-                                          &summary, &cache);
+  const LabelSpace first =
+      MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt, GcpSet{}, ref, nbs,
+                     30.0, true, {}, &summary, &cache);
   EXPECT_TRUE(cache.computed);
   ASSERT_TRUE(cache.depths.has_value());
   EXPECT_EQ(*cache.depths, *matched);
   // The second call takes the cached range and does not match again: a cache holding another
   // range (as if other images had been matched) gives that range.
   cache.depths = std::make_pair(matched->first * 2.0, matched->second);
-  const LabelSpace second = MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt,
-                                           std::nullopt, GcpSet{}, ref, nbs, 30.0, true, {},
-                                           &summary, &cache);
+  const LabelSpace second =
+      MakeLabelSpace(LabelSpaceKind::kDisparity, 16, std::nullopt, std::nullopt, GcpSet{}, ref, nbs,
+                     30.0, true, {}, &summary, &cache);
   EXPECT_EQ(summary.source, "matching");
   EXPECT_NEAR(second.max(), first.max() / 2.0, 1e-9);
   // A cached "nothing matched" is kept as well: the range falls back as without matches.

@@ -118,7 +118,8 @@ TEST(MeshIo, ObjKeepsArbitraryFloatsAndWritesNormals) {
     }
   }
   std::vector<Eigen::Vector3f> normals(mesh.vertices.size());
-  for (Eigen::Vector3f& n : normals) n = Eigen::Vector3f(uniform(rng), uniform(rng), 1.0f).normalized();
+  for (Eigen::Vector3f& n : normals)
+    n = Eigen::Vector3f(uniform(rng), uniform(rng), 1.0f).normalized();
   WriteMeshObj(dir + "/random.obj", mesh, normals);
 
   const TriangleMesh back = ReadMeshPly(dir + "/random.obj");

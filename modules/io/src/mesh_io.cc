@@ -122,8 +122,8 @@ void WriteMeshObj(const std::string& path, const TriangleMesh& mesh,
                      std::to_string(mesh.faces.size()) + " triangles (1-based indices)\n";
   // Measured on a fountain-size mesh: 73 bytes per coloured vertex line, 40 per normal, 49 per
   // face with normals. Reserving a little more keeps the 300 MB text from being reallocated.
-  text.reserve(text.size() + mesh.vertices.size() * (has_colors ? 76 : 40) +
-               normals.size() * 42 + mesh.faces.size() * (has_normals ? 52 : 28));
+  text.reserve(text.size() + mesh.vertices.size() * (has_colors ? 76 : 40) + normals.size() * 42 +
+               mesh.faces.size() * (has_normals ? 52 : 28));
   for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
     text += 'v';
     for (int k = 0; k < 3; ++k) AppendNumber(&text, mesh.vertices[v][k]);
