@@ -4,6 +4,7 @@
 #include "gcpstereo/io/dataset_io.h"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -371,6 +372,47 @@ TEST_F(KittiDataset, UnknownFrameAndWrongImageSize) {
   EXPECT_EQ(ErrorOf([&] { LoadDataset(Request()); }),
             drive_ + "/image_03/data/0000000010.png: image is 80x31 but " + root_ +
                 "/calib_cam_to_cam.txt declares S_rect_02 = 80x30");
+}
+
+TEST_F(KittiDataset, NeighbourScansNearestOnEitherSideWithinTheGap) {
+  fs::create_directories(drive_ + "/velodyne_points/data");
+  for (const char* f : {"0000000000", "0000000005", "0000000010", "0000000030", "notaframe"}) {
+    std::ofstream(drive_ + "/velodyne_points/data/" + f + ".bin");
+  }
+  // No timestamps.txt: frame numbers at 10 Hz.
+  std::vector<KittiScanTime> scans = KittiNeighbourScans(drive_, "0000000010", 2.0);
+  ASSERT_EQ(scans.size(), 2u);
+  EXPECT_EQ(scans[0].frame, "0000000005");
+  EXPECT_NEAR(scans[0].seconds_after_reference, -0.5, 1e-9);
+  EXPECT_EQ(scans[0].path, KittiVelodynePath(drive_, "0000000005"));
+  EXPECT_EQ(scans[1].frame, "0000000030");
+  EXPECT_NEAR(scans[1].seconds_after_reference, 2.0, 1e-9);
+  scans = KittiNeighbourScans(drive_, "0000000010", 1.5);
+  ASSERT_EQ(scans.size(), 1u);
+  EXPECT_EQ(scans[0].frame, "0000000005");
+  EXPECT_TRUE(KittiNeighbourScans(drive_, "0000000030", 1.0).empty());
+
+  // With timestamps.txt (line k = frame k), its times count: frame 30 only 0.4 s after frame 10.
+  {
+    std::ofstream stamps(drive_ + "/velodyne_points/timestamps.txt");
+    for (int k = 0; k <= 30; ++k) {
+      const double t = k <= 10 ? 0.1 * k : 1.0 + 0.02 * (k - 10);
+      char line[64];
+      std::snprintf(line, sizeof line, "2011-01-01 12:00:%012.9f\n", 10.0 + t);
+      stamps << line;
+    }
+  }
+  scans = KittiNeighbourScans(drive_, "0000000010", 1.0);
+  ASSERT_EQ(scans.size(), 2u);
+  EXPECT_NEAR(scans[1].seconds_after_reference, 0.4, 1e-6);
+
+  {
+    std::ofstream stamps(drive_ + "/velodyne_points/timestamps.txt", std::ios::trunc);
+    stamps << "2011-01-01 12:00:10.000000000\nyesterday\n";
+  }
+  const std::string message = ErrorOf([&] { KittiNeighbourScans(drive_, "0000000001", 1.0); });
+  EXPECT_NE(message.find("timestamps.txt"), std::string::npos) << message;
+  EXPECT_NE(message.find("line 2 is not a timestamp"), std::string::npos) << message;
 }
 
 }  // namespace

@@ -140,6 +140,82 @@ std::vector<std::string> KittiFrameNames(const std::string& drive_path) {
 
 }  // namespace internal
 
+namespace {
+
+// Seconds since midnight of a KITTI timestamp "YYYY-MM-DD hh:mm:ss.fffffffff"; NaN if malformed.
+double TimeOfDaySeconds(const std::string& line) {
+  const auto space = line.find(' ');
+  if (space == std::string::npos) return std::nan("");
+  std::istringstream in(line.substr(space + 1));
+  in.imbue(std::locale::classic());
+  int hours = 0, minutes = 0;
+  double seconds = 0.0;
+  char c1 = 0, c2 = 0;
+  if (!(in >> hours >> c1 >> minutes >> c2 >> seconds) || c1 != ':' || c2 != ':') {
+    return std::nan("");
+  }
+  return hours * 3600.0 + minutes * 60.0 + seconds;
+}
+
+}  // namespace
+
+std::vector<KittiScanTime> KittiNeighbourScans(const std::string& drive_path,
+                                               const std::string& frame, double max_gap_s) {
+  if (!IsFrameName(frame)) throw IoError(drive_path, "'" + frame + "' is not a KITTI frame number");
+  const fs::path dir = fs::path(drive_path) / "velodyne_points";
+  std::vector<std::string> timestamps;
+  const fs::path stamp_file = dir / "timestamps.txt";
+  if (internal::IsFile(stamp_file.string())) {
+    std::istringstream in(ReadFileBytes(stamp_file.string()));
+    std::string line;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      timestamps.push_back(line);
+    }
+  }
+  auto time_of = [&](const std::string& name) {
+    const long index = std::stol(name);
+    if (timestamps.empty()) return 0.1 * static_cast<double>(index);  // KITTI raw sync: 10 Hz
+    if (index < 0 || static_cast<size_t>(index) >= timestamps.size()) {
+      throw IoError(stamp_file.string(), "has no line for frame " + name);
+    }
+    const double t = TimeOfDaySeconds(timestamps[index]);
+    if (!std::isfinite(t)) {
+      throw IoError(stamp_file.string(), "line " + std::to_string(index + 1) +
+                                             " is not a timestamp: '" + timestamps[index] + "'");
+    }
+    return t;
+  };
+
+  std::vector<std::string> frames;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir / "data", ec)) {
+    if (entry.is_regular_file() && internal::LowerExtension(entry.path().string()) == ".bin" &&
+        IsFrameName(entry.path().stem().string())) {
+      frames.push_back(entry.path().stem().string());
+    }
+  }
+  std::sort(frames.begin(), frames.end());
+  const double reference_time = time_of(frame);
+  std::vector<KittiScanTime> out;
+  const KittiScanTime none{"", "", 0.0};
+  KittiScanTime before = none, after = none;
+  for (const std::string& name : frames) {
+    if (name == frame) continue;
+    double dt = time_of(name) - reference_time;
+    if (dt > 43200.0) dt -= 86400.0;  // the drive crossed midnight
+    if (dt < -43200.0) dt += 86400.0;
+    if (dt == 0.0 || std::abs(dt) > max_gap_s) continue;
+    KittiScanTime& slot = dt < 0.0 ? before : after;
+    if (slot.frame.empty() || std::abs(dt) < std::abs(slot.seconds_after_reference)) {
+      slot = {name, KittiVelodynePath(drive_path, name), dt};
+    }
+  }
+  if (!before.frame.empty()) out.push_back(before);
+  if (!after.frame.empty()) out.push_back(after);
+  return out;
+}
+
 Dataset LoadKittiRawDataset(const DatasetRequest& request) {
   internal::CheckRequest(request);
   // A trailing slash would make parent_path() the drive folder itself.

@@ -45,4 +45,20 @@ std::vector<std::string> ListDatasetViews(const std::string& format, const std::
 // <drive_path>/velodyne_points/data/<frame>.bin (not checked for existence).
 std::string KittiVelodynePath(const std::string& drive_path, const std::string& frame);
 
+// A Velodyne scan of a KITTI raw drive and its time relative to another frame's scan.
+struct KittiScanTime {
+  std::string frame;                     // "0000000030"
+  std::string path;                      // <drive>/velodyne_points/data/<frame>.bin
+  double seconds_after_reference = 0.0;  // < 0: earlier than the reference frame
+};
+
+// The scans of the drive nearest in time to `frame` on either side — at most one earlier and one
+// later — taken within max_gap_s of it, for registering `frame`'s scan (gcp::EstimateSweepMotion).
+// Times come from <drive>/velodyne_points/timestamps.txt when it exists (line k: the time of frame
+// k, "YYYY-MM-DD hh:mm:ss.fffffffff"), else from the frame numbers at KITTI's 10 Hz. Throws IoError
+// naming the file when timestamps.txt is malformed or too short, and for a frame name that is not
+// a number.
+std::vector<KittiScanTime> KittiNeighbourScans(const std::string& drive_path,
+                                               const std::string& frame, double max_gap_s);
+
 }  // namespace gcpstereo::io
