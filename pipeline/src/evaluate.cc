@@ -19,6 +19,7 @@
 #include "gcpstereo/io/mesh_io.h"
 #include "gcpstereo/io/pfm.h"
 #include "gcpstereo/io/point_cloud_io.h"
+#include "gcpstereo/pipeline/lidar_scan.h"
 #include "gcpstereo/pipeline/pipeline_config.h"
 #include "stages.h"
 
@@ -153,10 +154,10 @@ std::string RunEvaluation(const EvalRequest& r) {
     // A run scored on held-out LiDAR points: the split is a deterministic function of the scan
     // and the configuration, so it is made again here (as the GCP stage made it).
     if (o.eval.lidar_holdout && !o.gcp.lidar_path.empty()) {
-      gcp::LidarHoldout holdout =
-          gcp::SplitScanForHoldout(io::ReadPointCloud(o.gcp.lidar_path), dataset.world_from_lidar,
-                                   dataset.reference.camera, o.gcp.lidar, o.eval.holdout_block_px,
-                                   dataset.rectified ? dataset.disparity_numerator : 0.0);
+      gcp::LidarHoldout holdout = gcp::SplitScanForHoldout(
+          LoadLidarScan(o.gcp.lidar_path, o.dataset.path, o.dataset.reference, o.gcp.lidar_motion),
+          dataset.world_from_lidar, dataset.reference.camera, o.gcp.lidar, o.eval.holdout_block_px,
+          dataset.rectified ? dataset.disparity_numerator : 0.0);
       held_out = std::move(holdout.scored);
       inputs.lidar_holdout = &held_out;
       inputs.holdout_in_disparity = dataset.rectified;

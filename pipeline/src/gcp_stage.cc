@@ -18,6 +18,7 @@
 #include "gcpstereo/io/image_io.h"
 #include "gcpstereo/io/pfm.h"
 #include "gcpstereo/io/point_cloud_io.h"
+#include "gcpstereo/pipeline/lidar_scan.h"
 #include "stages.h"
 
 namespace gcpstereo::pipeline::internal {
@@ -35,6 +36,26 @@ json SummaryJson(const gcp::GcpSourceSummary& s) {
           {"inconsistent", s.num_inconsistent},
           {"gcps", s.num_gcps},
           {"density_percent", s.density_percent}};
+}
+
+json LidarMotionJson(const LidarScanSummary& s) {
+  json out = {{"mode", s.mode}, {"compensated", s.compensated}, {"seconds", s.seconds}};
+  if (s.compensated) {
+    out["velocity_mps"] = {s.motion.velocity.x(), s.motion.velocity.y(), s.motion.velocity.z()};
+    out["speed_mps"] = s.motion.velocity.norm();
+    out["yaw_rate_deg_s"] = s.motion.yaw_rate_rad_s * 180.0 / 3.14159265358979323846;
+  }
+  if (!s.message.empty()) out["message"] = s.message;
+  for (const gcp::ScanRegistrationSummary& r : s.registrations) {
+    const Eigen::Vector3d t = r.reference_from_other.topRightCorner<3, 1>();
+    out["registrations"].push_back({{"scan", r.name},
+                                    {"seconds_after_reference", r.seconds_after_reference},
+                                    {"translation", {t.x(), t.y(), t.z()}},
+                                    {"inlier_fraction", r.inlier_fraction},
+                                    {"rmse", r.rmse},
+                                    {"used", r.used}});
+  }
+  return out;
 }
 
 // Reads gcp.depth_map.path as a depth map of the reference view (CV_32F, +inf = none).
@@ -115,6 +136,7 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
     if (names[i] == "stereo") order.push_back(i);
   }
   LabelSpace provisional_labels;
+  json lidar_motion;  // gcp.lidar.motion: what was compensated, for report.json
 
   for (const size_t index : order) {
     const std::string& source = names[index];
@@ -127,7 +149,11 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       provisional_labels = provisional_labels_of(gcp::MergeGcpSets(others));
     }
     if (source == "lidar") {
-      PointCloud cloud = io::ReadPointCloud(config.gcp.lidar_path);
+      LidarScanSummary scan_summary;
+      PointCloud cloud =
+          LoadLidarScan(config.gcp.lidar_path, config.dataset.path, config.dataset.reference,
+                        config.gcp.lidar_motion, &scan_summary);
+      lidar_motion = LidarMotionJson(scan_summary);
       if (config.eval.lidar_holdout) {
         // Checkerboard split: GCP blocks feed the GCPs; the visible points of the other blocks
         // score the result (gcp::SplitScanForHoldout).
@@ -242,6 +268,7 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
                    {"count", result.gcps.size()},
                    {"density_percent", gcp::DensityPercent(result.gcps, width, height)}};
   if (!refinement.is_null()) result.report["stereo_refinement"] = refinement;
+  if (!lidar_motion.is_null()) result.report["lidar_motion"] = lidar_motion;
   return result;
 }
 

@@ -104,6 +104,29 @@ void PipelineConfig::Register(config::Schema* s) {
          {"sigma of points whose cloud carries none (HDL-64E ≈ 0.02)", "m"});
   s->Add("gcp.lidar.min_depth", &gcp.lidar.min_depth, Range::AtLeast(0.0),
          {"ignore points nearer than this depth", "m"});
+  s->Add("gcp.lidar.motion.mode", &gcp.lidar_motion.mode, {"off", "given", "registration"},
+         {"motion compensation of a spinning scanner's sweep (kitti_raw): off; given = "
+          "gcp.lidar.motion.speed_mps and yaw_rate_deg_s; registration = ego-motion from ICP "
+          "with the drive's nearest earlier and later scans"});
+  s->Add("gcp.lidar.motion.speed_mps", &gcp.lidar_motion.speed_mps, Range::Between(-100.0, 100.0),
+         {"mode given: the sensor's speed along its +x (forward) axis", "m/s"});
+  s->Add(
+      "gcp.lidar.motion.yaw_rate_deg_s", &gcp.lidar_motion.yaw_rate_deg_s,
+      Range::Between(-360.0, 360.0),
+      {"mode given: the sensor's yaw rate, counter-clockwise seen from above positive", "deg/s"});
+  s->Add("gcp.lidar.motion.max_gap_s", &gcp.lidar_motion.max_gap_s, Range::GreaterThan(0.0),
+         {"mode registration: use scans at most this far in time from the reference's", "s"});
+  s->Add("gcp.lidar.motion.min_inlier_fraction", &gcp.lidar_motion.registration.min_inlier_fraction,
+         Range::Between(0.0, 1.0),
+         {"mode registration: a registration with fewer points within 0.3 m of the other scan "
+          "is not used"});
+  s->Add("gcp.lidar.motion.sweep_period_s", &gcp.lidar_motion.sweep.period_s,
+         Range::GreaterThan(0.0), {"duration of one revolution (HDL-64E in KITTI: 0.1)", "s"});
+  s->Add("gcp.lidar.motion.clockwise", &gcp.lidar_motion.sweep.clockwise,
+         {"the scanner turns clockwise seen from above (Velodyne scanners do)"});
+  s->Add("gcp.lidar.motion.trigger_azimuth_deg", &gcp.lidar_motion.sweep.trigger_azimuth_deg,
+         Range::Between(-180.0, 180.0),
+         {"the scanner's azimuth when the camera exposes, from +x towards +y (KITTI: 0)", "deg"});
   s->Add("gcp.stereo.max_spread_px", &gcp.stereo.max_spread_px, Range::Between(0, 10),
          {"the three WTA disparities (BT, NCC, adaptive weights) must agree within this", "px"});
   s->Add("gcp.stereo.lr_tolerance_px", &gcp.stereo.lr_tolerance_px, Range::Between(0, 10),
@@ -402,6 +425,7 @@ void PipelineConfig::Register(config::Schema* s) {
 void PipelineConfig::Check() const {
   // The stage options' own checks (cross-field constraints; ranges are checked while loading).
   gcp.lidar.Check();
+  gcp.lidar_motion.Check();
   gcp.stereo.Check();
   cost.plane_sweep.Check();
   cost.birchfield_tomasi.Check();
@@ -431,6 +455,12 @@ void PipelineConfig::Check() const {
     throw ConfigError(ViolatedConstraint("labels.space", "disparity",
                                          "depth or inverse_depth for calibrated (strecha) data; "
                                          "disparity needs rectified data"));
+  }
+  if (gcp.lidar_motion.mode != "off" && dataset.format != "kitti_raw") {
+    throw ConfigError(ViolatedConstraint(
+        "gcp.lidar.motion.mode", gcp.lidar_motion.mode,
+        "off unless dataset.format is kitti_raw (motion compensation needs the scan in the "
+        "scanner's own frame)"));
   }
   if (eval.lidar_holdout &&
       std::find(gcp.sources.begin(), gcp.sources.end(), "lidar") == gcp.sources.end()) {

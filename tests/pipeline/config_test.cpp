@@ -61,6 +61,17 @@ TEST(PipelineConfig, CrossKeyChecks) {
   } catch (const ConfigError& e) {
     EXPECT_STREQ(e.what(), "gcp.sources lists lidar but gcp.lidar.path is not set");
   }
+  LoadedConfig motion_of_a_world_cloud;  // strecha clouds are in world coordinates
+  try {
+    motion_of_a_world_cloud.Load(
+        "", {"dataset.path=/x", "dataset.reference=a", "gcp.lidar.motion.mode=registration"});
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(),
+                 "gcp.lidar.motion.mode = registration. Violated constraint: off unless "
+                 "dataset.format is kitti_raw (motion compensation needs the scan in the "
+                 "scanner's own frame)");
+  }
 }
 
 // Every choice the schema offers for an algorithm key passes the module's own check (the schema

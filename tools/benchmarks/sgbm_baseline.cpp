@@ -25,14 +25,14 @@
 // view1/view5; KITTI left/right).
 // With --lidar-holdout (kitti_raw), the frame's Velodyne scan is projected and split exactly as
 // `gcpstereo run … --set eval.lidar_holdout=true` does (gcp::SplitScanForHoldout: 8×8 checkerboard,
-// visible points only)
-// and SGBM is scored on the held-out points (KITTI-style bad-3, bad-1), so its numbers compare
-// one to one with the pipeline's metrics.lidar_holdout.result.
-// With --filled-output, a second map is written whose invalid pixels are filled as the KITTI
-// stereo devkit does before scoring sparse submissions (io_disp.h, interpolateBackground: each
-// invalid run inside a row takes the smaller, i.e. background, disparity of its two valid
-// neighbours; row ends and then column ends are extrapolated from the nearest valid pixel); the
-// hold-out scores are then reported for both maps.
+// visible points only; with --lidar-motion registration the scan is first motion-compensated
+// as gcp.lidar.motion.mode registration does, pipeline::LoadLidarScan) and SGBM is scored on the
+// held-out points (KITTI-style bad-3, bad-1), so its numbers compare one to one with the pipeline's
+// metrics.lidar_holdout.result. With --filled-output, a second map is written whose invalid pixels
+// are filled as the KITTI stereo devkit does before scoring sparse submissions (io_disp.h,
+// interpolateBackground: each invalid run inside a row takes the smaller, i.e. background,
+// disparity of its two valid neighbours; row ends and then column ends are extrapolated from the
+// nearest valid pixel); the hold-out scores are then reported for both maps.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -55,7 +55,7 @@
 #include "gcpstereo/io/dataset_io.h"
 #include "gcpstereo/io/image_io.h"
 #include "gcpstereo/io/pfm.h"
-#include "gcpstereo/io/point_cloud_io.h"
+#include "gcpstereo/pipeline/lidar_scan.h"
 
 namespace {
 
@@ -87,6 +87,7 @@ struct SgbmArgs {
   int repeat = 1;      // runs of compute() for the timing (the minimum is reported)
   bool lidar_holdout = false;
   int holdout_block_px = 8;
+  std::string lidar_motion = "off";  // gcp.lidar.motion.mode: off | registration
 };
 
 int ModeOf(const std::string& mode) {
@@ -236,6 +237,11 @@ int Main(int argc, char** argv) {
   app.add_flag("--lidar-holdout", a.lidar_holdout,
                "kitti_raw: score against the held-out half of the Velodyne scan, split exactly as "
                "gcpstereo run --set eval.lidar_holdout=true");
+  app.add_option("--lidar-motion", a.lidar_motion,
+                 "kitti_raw: off, or registration to compensate the sweep's motion first, as "
+                 "gcp.lidar.motion.mode registration does (configs/kitti_lidar.yaml)")
+      ->check(CLI::IsMember({"off", "registration"}))
+      ->capture_default_str();
   app.add_option("--holdout-block", a.holdout_block_px,
                  "checkerboard block, px (eval.holdout_block_px)")
       ->capture_default_str();
@@ -327,7 +333,10 @@ int Main(int argc, char** argv) {
     // with the default gcp.lidar.* options, as in configs/kitti_lidar.yaml): the visible points of
     // the scoring blocks, in disparity = numerator / depth.
     const std::string scan_path = gcpstereo::io::KittiVelodynePath(a.dataset_path, a.reference);
-    const gcpstereo::PointCloud cloud = gcpstereo::io::ReadPointCloud(scan_path);
+    gcpstereo::gcp::LidarMotionOptions motion;
+    motion.mode = a.lidar_motion;
+    const gcpstereo::PointCloud cloud =
+        gcpstereo::pipeline::LoadLidarScan(scan_path, a.dataset_path, a.reference, motion);
     const std::vector<gcpstereo::eval::ReferencePoint> held_out =
         gcpstereo::gcp::SplitScanForHoldout(
             cloud, dataset.world_from_lidar, dataset.reference.camera,
@@ -335,6 +344,7 @@ int Main(int argc, char** argv) {
             .scored;
     report["lidar_holdout"] = {
         {"scan", scan_path},
+        {"lidar_motion", a.lidar_motion},
         {"block_px", a.holdout_block_px},
         {"points", held_out.size()},
         {"result", gcpstereo::eval::EvaluateAgainstPoints(disparity, held_out).ToJson()}};

@@ -12,6 +12,7 @@
 #include "gcpstereo/cost/plane_sweep.h"
 #include "gcpstereo/gcp/gcp_sources.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
+#include "gcpstereo/gcp/sweep_motion.h"
 #include "gcpstereo/mesh/meshing.h"
 #include "gcpstereo/mesh/render.h"
 #include "gcpstereo/optimize/alpha_expansion.h"
@@ -55,6 +56,7 @@ struct GcpOptions {
   DepthMapGcpOptions depth_map;      // gcp.depth_map.*
   int downsample = 16;               // s: one GCP per s×s block (paper: 16 → ≈0.4 %)
   gcp::LidarGcpOptions lidar;        // gcp.lidar.*
+  gcp::LidarMotionOptions lidar_motion;  // gcp.lidar.motion.*: the sweep's motion compensation
   gcp::StereoGcpOptions stereo;      // gcp.stereo.*
 };
 
