@@ -91,6 +91,7 @@ KITTI_DRIVE = "2011_09_26_drive_0009_sync"
 KITTI_FRAMES = ["0000000000", "0000000010", "0000000020", "0000000030", "0000000040",
                 "0000000050"]
 KITTI_MAX_DISPARITY = 127  # configs/kitti_lidar.yaml labels 0..127
+KITTI_LIDAR_MOTION = "registration"  # configs/kitti_lidar.yaml gcp.lidar.motion.mode
 
 SUITES = ["costs", "table2", "endtoend"]
 
@@ -678,6 +679,8 @@ def suite_endtoend(runner, scenes, frames, include_fountain):
             s, _ = runner.sgbm("endtoend/sgbm_kitti_%s" % frame, [
                 "--format", "kitti_raw", "--path", drive, "--reference", frame,
                 "--num-disparities", str(KITTI_MAX_DISPARITY + 1), "--lidar-holdout",
+                # the held-out points of configs/kitti_lidar.yaml (gcp.lidar.motion.mode)
+                "--lidar-motion", KITTI_LIDAR_MOTION,
                 "--filled-output", os.path.join(runner.runs, "endtoend", "sgbm_kitti_%s" % frame,
                                                 "disparity_filled.pfm")])
             h = dig(s, "lidar_holdout", "result")

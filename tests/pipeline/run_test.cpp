@@ -471,8 +471,9 @@ TEST(KittiRun, ScanOfAnotherFrameIsWarnedAndReported) {
 
 // KITTI frame 10 at half size (5 s a run): the weighted-median D̂ of kitti_lidar.yaml against the
 // paper's linear-system D̂, and its colour floor and edge stretch against plain joint-bilateral
-// weights (σs 4, σc 20). Measured held-out bad-3: 1.59 % against 3.70 % (linear system) and
-// 2.11 % (plain weights); D̂ alone 1.34 / 3.44 / 1.89 % (full size: see the config).
+// weights (σs 4, σc 20), on the motion-compensated scan. Measured held-out bad-3: 1.76 % against
+// 3.62 % (linear system) and 2.13 % (plain weights); D̂ alone 1.44 / 3.33 / 1.81 % (full size: see
+// the config).
 TEST(KittiRun, MedianPriorFollowsTheScan) {
   GCPSTEREO_REQUIRE_SHARED_DATA(drive, "kitti/2011_09_26/2011_09_26_drive_0009_sync");
   const std::string dir = testing::MakeTempDir("gcpstereo-kitti");
