@@ -26,6 +26,8 @@ namespace {
 
 using nlohmann::json;
 
+constexpr double kPi = 3.14159265358979323846;
+
 json SummaryJson(const gcp::GcpSourceSummary& s) {
   return {{"source", s.source},
           {"input", s.num_input},
@@ -43,7 +45,7 @@ json LidarMotionJson(const LidarScanSummary& s) {
   if (s.compensated) {
     out["velocity_mps"] = {s.motion.velocity.x(), s.motion.velocity.y(), s.motion.velocity.z()};
     out["speed_mps"] = s.motion.velocity.norm();
-    out["yaw_rate_deg_s"] = s.motion.yaw_rate_rad_s * 180.0 / 3.14159265358979323846;
+    out["yaw_rate_deg_s"] = s.motion.yaw_rate_rad_s * 180.0 / kPi;
   }
   if (!s.message.empty()) out["message"] = s.message;
   for (const gcp::ScanRegistrationSummary& r : s.registrations) {

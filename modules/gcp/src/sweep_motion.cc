@@ -105,8 +105,9 @@ ScanRegistrationSummary Register(const PointCloud& reference, const TimedScan& o
   if (source_coarse->size() > kMaxCoarsePoints) {
     PclCloud::Ptr thinned(new PclCloud);
     const size_t stride = (source_coarse->size() + kMaxCoarsePoints - 1) / kMaxCoarsePoints;
-    for (size_t i = 0; i < source_coarse->size(); i += stride)
+    for (size_t i = 0; i < source_coarse->size(); i += stride) {
       thinned->push_back((*source_coarse)[i]);
+    }
     source_coarse = thinned;
   }
   pcl::KdTreeFLANN<pcl::PointXYZ> tree_coarse;
@@ -214,8 +215,9 @@ SweepMotionEstimate EstimateSweepMotion(const PointCloud& reference,
   Eigen::Vector3d velocity_sum = Eigen::Vector3d::Zero();
   double yaw_rate_sum = 0.0;
   for (const TimedScan& other : others) {
-    if (other.scan == nullptr)
+    if (other.scan == nullptr) {
       throw Error("EstimateSweepMotion: scan '" + other.name + "' is null");
+    }
     if (!(std::abs(other.seconds_after_reference) > 0.0)) {
       throw Error("EstimateSweepMotion: scan '" + other.name +
                   "' was taken at the reference's time (seconds_after_reference = 0)");
