@@ -115,7 +115,7 @@ ScanRegistrationSummary Register(const PointCloud& reference, const TimedScan& o
   Icp coarse_icp(source_coarse, target_coarse);
 
   Fit best;
-  bool first = true;
+  best.inlier_fraction = -1.0;  // any start beats it
   for (const double speed : options.initial_speeds_mps) {
     // The other scan's points seen from the reference pose: displaced by the distance driven.
     Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
@@ -123,8 +123,7 @@ ScanRegistrationSummary Register(const PointCloud& reference, const TimedScan& o
     Eigen::Matrix4f coarse = coarse_icp.Align(guess, 5.0, 10);
     coarse = coarse_icp.Align(coarse, 1.5, 10);
     const Fit fit = Score(*source_coarse, tree_coarse, coarse, 2.0 * options.inlier_distance);
-    if (first || fit.inlier_fraction > best.inlier_fraction) best = fit;
-    first = false;
+    if (fit.inlier_fraction > best.inlier_fraction) best = fit;
   }
 
   const PclCloud::Ptr target = ForRegistration(reference, options, options.voxel);

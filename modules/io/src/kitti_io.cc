@@ -114,34 +114,6 @@ bool IsFrameName(const std::string& name) {
                                       [](unsigned char c) { return std::isdigit(c) != 0; });
 }
 
-}  // namespace
-
-namespace internal {
-
-std::vector<std::string> KittiFrameNames(const std::string& drive_path) {
-  const fs::path dir = fs::path(drive_path) / "image_02" / "data";
-  if (!IsFolder(dir.string())) {
-    throw IoError(dir.string(),
-                  "KITTI left image folder not found (expected a raw drive folder "
-                  "<date>/<date>_drive_NNNN_sync)");
-  }
-  std::vector<std::string> frames;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    if (entry.is_regular_file() && LowerExtension(entry.path().string()) == ".png" &&
-        IsFrameName(entry.path().stem().string())) {
-      frames.push_back(entry.path().stem().string());
-    }
-  }
-  std::sort(frames.begin(), frames.end());
-  if (frames.empty()) throw IoError(dir.string(), "no frames (NNNNNNNNNN.png)");
-  return frames;
-}
-
-}  // namespace internal
-
-namespace {
-
 // Seconds since midnight of a KITTI timestamp "YYYY-MM-DD hh:mm:ss.fffffffff"; NaN if malformed.
 double TimeOfDaySeconds(const std::string& line) {
   const auto space = line.find(' ');
@@ -157,7 +129,37 @@ double TimeOfDaySeconds(const std::string& line) {
   return hours * 3600.0 + minutes * 60.0 + seconds;
 }
 
+// The frame names (NNNNNNNNNN) of the files with `extension` in `dir`, sorted; none if no folder.
+std::vector<std::string> FramesIn(const fs::path& dir, const std::string& extension) {
+  std::vector<std::string> frames;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    if (entry.is_regular_file() && internal::LowerExtension(entry.path().string()) == extension &&
+        IsFrameName(entry.path().stem().string())) {
+      frames.push_back(entry.path().stem().string());
+    }
+  }
+  std::sort(frames.begin(), frames.end());
+  return frames;
+}
+
 }  // namespace
+
+namespace internal {
+
+std::vector<std::string> KittiFrameNames(const std::string& drive_path) {
+  const fs::path dir = fs::path(drive_path) / "image_02" / "data";
+  if (!IsFolder(dir.string())) {
+    throw IoError(dir.string(),
+                  "KITTI left image folder not found (expected a raw drive folder "
+                  "<date>/<date>_drive_NNNN_sync)");
+  }
+  const std::vector<std::string> frames = FramesIn(dir, ".png");
+  if (frames.empty()) throw IoError(dir.string(), "no frames (NNNNNNNNNN.png)");
+  return frames;
+}
+
+}  // namespace internal
 
 std::vector<KittiScanTime> KittiNeighbourScans(const std::string& drive_path,
                                                const std::string& frame, double max_gap_s) {
@@ -187,20 +189,9 @@ std::vector<KittiScanTime> KittiNeighbourScans(const std::string& drive_path,
     return t;
   };
 
-  std::vector<std::string> frames;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir / "data", ec)) {
-    if (entry.is_regular_file() && internal::LowerExtension(entry.path().string()) == ".bin" &&
-        IsFrameName(entry.path().stem().string())) {
-      frames.push_back(entry.path().stem().string());
-    }
-  }
-  std::sort(frames.begin(), frames.end());
   const double reference_time = time_of(frame);
-  std::vector<KittiScanTime> out;
-  const KittiScanTime none{"", "", 0.0};
-  KittiScanTime before = none, after = none;
-  for (const std::string& name : frames) {
+  KittiScanTime before, after;  // empty frame: none found
+  for (const std::string& name : FramesIn(dir / "data", ".bin")) {
     if (name == frame) continue;
     double dt = time_of(name) - reference_time;
     if (dt > 43200.0) dt -= 86400.0;  // the drive crossed midnight
@@ -211,6 +202,7 @@ std::vector<KittiScanTime> KittiNeighbourScans(const std::string& drive_path,
       slot = {name, KittiVelodynePath(drive_path, name), dt};
     }
   }
+  std::vector<KittiScanTime> out;
   if (!before.frame.empty()) out.push_back(before);
   if (!after.frame.empty()) out.push_back(after);
   return out;
