@@ -52,6 +52,19 @@ struct PointCloud {
   bool empty() const { return points.empty(); }
 };
 
+// A coloured, oriented point cloud in the world frame: the fused points of a scene (fusion
+// module), the input of the scene mesh. All channels have one entry per point.
+struct OrientedPointCloud {
+  std::vector<Eigen::Vector3f> points;
+  std::vector<Eigen::Vector3f> normals;                   // unit length, towards the cameras
+  std::vector<Eigen::Matrix<std::uint8_t, 3, 1>> colors;  // RGB, 0…255
+  std::vector<std::uint16_t> num_views;  // views whose depth maps agree on the point; 0 = a GCP
+  std::vector<float> sigma;              // a GCP's measured standard deviation; 0 = fused point
+
+  size_t size() const { return points.size(); }
+  bool empty() const { return points.empty(); }
+};
+
 // Where a ground control point came from (paper §4.1: image matches; §4.2: laser scan).
 enum class GcpSource : std::uint8_t { kLidar = 0, kDepthMap = 1, kStereo = 2 };
 const char* GcpSourceName(GcpSource source);
