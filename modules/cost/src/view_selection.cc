@@ -101,16 +101,14 @@ void ViewSelectionOptions::Check() const {
     throw ConfigError(ViolatedConstraint("dataset.neighbor_count", Str(count), "1 <= count <= 64"));
   }
   if (!(min_angle_deg > 0.0 && min_angle_deg < optimal_angle_deg)) {
-    throw ConfigError(ViolatedConstraint("dataset.neighbor_selection.min_angle_deg",
-                                         FormatNumber(min_angle_deg),
-                                         "0 < min_angle_deg < optimal_angle_deg (" +
-                                             FormatNumber(optimal_angle_deg) + ")"));
+    throw ConfigError(ViolatedConstraint(
+        "dataset.neighbor_selection.min_angle_deg", FormatNumber(min_angle_deg),
+        "0 < min_angle_deg < optimal_angle_deg (" + FormatNumber(optimal_angle_deg) + ")"));
   }
   if (!(optimal_angle_deg < max_angle_deg)) {
-    throw ConfigError(ViolatedConstraint("dataset.neighbor_selection.optimal_angle_deg",
-                                         FormatNumber(optimal_angle_deg),
-                                         "optimal_angle_deg < max_angle_deg (" +
-                                             FormatNumber(max_angle_deg) + ")"));
+    throw ConfigError(ViolatedConstraint(
+        "dataset.neighbor_selection.optimal_angle_deg", FormatNumber(optimal_angle_deg),
+        "optimal_angle_deg < max_angle_deg (" + FormatNumber(max_angle_deg) + ")"));
   }
   if (!(max_angle_deg < 90.0)) {
     throw ConfigError(ViolatedConstraint("dataset.neighbor_selection.max_angle_deg",
@@ -188,7 +186,9 @@ ViewSelection SelectNeighbors(const std::vector<Camera>& cameras, int reference_
     for (std::size_t i = 0; i < samples.size(); i += stride) samples[kept++] = samples[i];
     samples.resize(kept);
   }
-  if (!samples.empty()) {
+  const bool grid_basis = samples.empty();
+  double grid_depth = 0.0;  // z₀ of the "frustum" basis
+  if (!grid_basis) {
     result.basis = "points";
   } else {
     result.basis = "frustum";
@@ -203,6 +203,7 @@ ViewSelection SelectNeighbors(const std::vector<Camera>& cameras, int reference_
         samples.push_back(reference.BackProject(Eigen::Vector2d(x, y), depth));
       }
     }
+    grid_depth = depth;
   }
   result.points_used = static_cast<int>(samples.size());
 
@@ -220,7 +221,11 @@ ViewSelection SelectNeighbors(const std::vector<Camera>& cameras, int reference_
     const double focal = MeanFocal(candidate);
     double sum = 0.0;
     std::vector<double> angles_deg;
-    for (std::size_t k = 0; k < samples.size(); ++k) {
+    // The grid's points stand for a fronto-parallel surface at z₀: a candidate level with it or
+    // behind it would see it edge-on or from the back.
+    const bool sees_front =
+        !grid_basis || reference.CameraFromWorld(candidate.center_world).z() < grid_depth;
+    for (std::size_t k = 0; sees_front && k < samples.size(); ++k) {
       Eigen::Vector2d pixel;
       double depth = 0.0;
       if (!candidate.Project(samples[k], &pixel, &depth) || !candidate.InImage(pixel)) continue;

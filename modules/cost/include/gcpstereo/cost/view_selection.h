@@ -51,11 +51,11 @@ struct NeighborScore {
 
 struct ViewSelection {
   int reference_index = -1;
-  std::vector<int> neighbors;               // chosen, best first
-  std::vector<NeighborScore> candidates;    // every other view, best first (ties: lower index)
-  std::string basis;                        // "points" (given scene points) or "frustum" (grid)
-  int points_given = 0;                     // size of points_world
-  int points_used = 0;                      // reference points the scores are computed over
+  std::vector<int> neighbors;             // chosen, best first
+  std::vector<NeighborScore> candidates;  // every other view, best first (ties: lower index)
+  std::string basis;                      // "points" (given scene points) or "frustum" (grid)
+  int points_given = 0;                   // size of points_world
+  int points_used = 0;                    // reference points the scores are computed over
 
   // {"reference", "basis", "points_given", "points_used", "neighbors": [names],
   //  "candidates": [{"name", "index", "score", "median_angle_deg", "shared_fraction",
@@ -85,7 +85,9 @@ struct ViewSelection {
 //     least 1°) — where converging cameras look; when no axis converges (a rectified sequence) z₀ =
 //     b / tan θ_opt with b the median distance of the other centres from the reference's, so that
 //     the median baseline sees the points at the optimal angle. z₀ is clamped to [min_depth,
-//     max_depth].
+//     max_depth]. The grid's points stand for a fronto-parallel surface: a candidate whose centre
+//     is not in front of that plane (its reference-camera z >= z₀) would see it edge-on or from
+//     behind, and sees none of them.
 // Score of candidate j (dimensionless, in [0, 1]):
 //   S_j = (1/N) Σ_{k: j sees X_k} w_θ(θ_jk) · w_s(r_jk)
 // i.e. the shared fraction (points j sees, in front and inside its image; no occlusion test)
