@@ -109,6 +109,27 @@ TEST(ViewSelection, RingPicksTheNearestViewsOnEitherSide) {
   }
 }
 
+TEST(ViewSelection, RectifiedSequenceUsesTheMedianBaseline) {
+  // Five parallel cameras 10 cm apart (no converging axes): the grid lies at z₀ = b / tan θ_opt with
+  // b = 15 cm the median distance from the reference (view 2), where the views two steps away see
+  // the points on the principal ray at 13.2° and those one step away at 6.7° (off-axis points at
+  // somewhat less: they are farther).
+  std::vector<Camera> cameras;
+  for (int i = 0; i < 5; ++i)
+    cameras.push_back(RectifiedSequenceCamera(500, 319.5, 239.5, 0.1, i, 640, 480));
+  ViewSelectionOptions options;
+  options.count = 2;
+  const ViewSelection s = SelectNeighbors(cameras, 2, {}, options);
+  EXPECT_EQ(s.basis, "frustum");
+  EXPECT_EQ(AsSet(s.neighbors), (std::set<int>{0, 4}));
+  ASSERT_EQ(s.candidates.size(), 4u);
+  EXPECT_GT(s.candidates[0].median_angle_deg, 11.0);
+  EXPECT_LT(s.candidates[0].median_angle_deg, 13.3);
+  EXPECT_GT(s.candidates[2].median_angle_deg, 5.5);
+  EXPECT_LT(s.candidates[2].median_angle_deg, 6.7);
+  EXPECT_GT(s.candidates[3].score, 0.0);
+}
+
 TEST(ViewSelection, GivenPointsExcludeViewsThatDoNotSeeThem) {
   // Reference at the origin looking along +z (world = camera frame); L one metre to its left
   // turned 25° to the left, R one metre to its right turned 25° to the right.
@@ -230,7 +251,9 @@ TEST(ViewSelection, FountainP11ReferenceFiveMatchesThePaper) {
   const ViewSelection s = SelectNeighbors(cameras, 5, {}, {});
   EXPECT_EQ(s.basis, "frustum");
   // The paper matches 0005 against 0002, 0003, 0004, 0006, 0007, 0008; the frustum-based choice
-  // is exactly that set (the three nearest views on either side of the arc).
+  // is exactly that set: the three nearest views on either side of the arc (≈ 10°, 20°, 30° from
+  // 0005). 0001 (38°) and 0009 (43°) follow closely, since their angles are still on the plateau,
+  // but they see less of the reference's image.
   EXPECT_EQ(AsSet(s.neighbors), (std::set<int>{2, 3, 4, 6, 7, 8}));
   PrintTable("fountain-P11, neighbours without points (frustum basis):", cameras, {});
 }
@@ -258,6 +281,7 @@ TEST(ViewSelection, FountainP11WithColmapPoints) {
   ASSERT_EQ(points.size(), 15038u);
   const ViewSelection s = SelectNeighbors(cameras, 5, points, {});
   EXPECT_EQ(s.basis, "points");
+  // The SfM points give the same set as the frustum basis and the paper.
   EXPECT_EQ(AsSet(s.neighbors), (std::set<int>{2, 3, 4, 6, 7, 8}));
   PrintTable("fountain-P11, neighbours with COLMAP's 15,038 SfM points:", cameras, points);
 }
