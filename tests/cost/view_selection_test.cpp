@@ -110,10 +110,10 @@ TEST(ViewSelection, RingPicksTheNearestViewsOnEitherSide) {
 }
 
 TEST(ViewSelection, RectifiedSequenceUsesTheMedianBaseline) {
-  // Five parallel cameras 10 cm apart (no converging axes): the grid lies at z₀ = b / tan θ_opt with
-  // b = 15 cm the median distance from the reference (view 2), where the views two steps away see
-  // the points on the principal ray at 13.2° and those one step away at 6.7° (off-axis points at
-  // somewhat less: they are farther).
+  // Five parallel cameras 10 cm apart (no converging axes): the grid lies at z₀ = b / tan θ_opt
+  // with b = 15 cm the median distance from the reference (view 2), where the views two steps away
+  // see the points on the principal ray at 13.2° and those one step away at 6.7° (off-axis points
+  // at somewhat less: they are farther).
   std::vector<Camera> cameras;
   for (int i = 0; i < 5; ++i)
     cameras.push_back(RectifiedSequenceCamera(500, 319.5, 239.5, 0.1, i, 640, 480));
