@@ -303,7 +303,8 @@ OrientedPointCloud FuseDepthMaps(const std::vector<FusionView>& views, const Fus
     const std::string context = "FuseDepthMaps: view " + Str(i) + " '" + view.name + "'";
     view.camera.Validate(context);
     CheckDepthMap(view.depth, view.camera, context);
-    if (view.image_bgr.type() != CV_8UC3 && view.image_bgr.type() != CV_8UC1) {
+    if (view.image_bgr.empty() ||
+        (view.image_bgr.type() != CV_8UC3 && view.image_bgr.type() != CV_8UC1)) {
       throw Error(context + ": the image must be CV_8UC3 (BGR) or CV_8UC1, got " +
                   (view.image_bgr.empty() ? std::string("an empty image")
                                           : "type " + Str(view.image_bgr.type())));
