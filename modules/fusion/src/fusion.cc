@@ -182,6 +182,10 @@ void FusionOptions::Check() const {
                                          FormatNumber(normal_tolerance_deg),
                                          "0 < normal_tolerance_deg <= 180"));
   }
+  if (normal_radius_px < 1 || normal_radius_px > 16) {
+    throw ConfigError(ViolatedConstraint("fusion.normal_radius_px", Str(normal_radius_px),
+                                         "1 <= normal_radius_px <= 16"));
+  }
   if (stride_px < 1 || stride_px > 64) {
     throw ConfigError(
         ViolatedConstraint("fusion.stride_px", Str(stride_px), "1 <= stride_px <= 64"));
@@ -221,8 +225,11 @@ std::string FusionSummary::FullReport() const {
   return s.str();
 }
 
-cv::Mat DepthMapNormals(const cv::Mat& depth, const Camera& camera) {
+cv::Mat DepthMapNormals(const cv::Mat& depth, const Camera& camera, int radius_px) {
   CheckDepthMap(depth, camera, "DepthMapNormals");
+  if (radius_px < 1 || radius_px > 16) {
+    throw Error("DepthMapNormals: radius_px = " + Str(radius_px) + ", must be in [1, 16]");
+  }
   const int width = depth.cols;
   const int height = depth.rows;
   const Eigen::Matrix3d K_inverse = camera.K.inverse();
@@ -250,31 +257,40 @@ cv::Mat DepthMapNormals(const cv::Mat& depth, const Camera& camera) {
         const float dc = d[col];
         if (!IsValidDepth(dc)) continue;
         const Eigen::Vector3d& X = points[static_cast<size_t>(row) * width + col];
-        // Of two opposite neighbours, the valid one closer in depth (the first on ties); the
-        // tangent always points towards +col / +row. False when neither is valid.
-        auto tangent = [&](int c0, int r0, int c1, int r1, Eigen::Vector3d* t) {
-          float best = std::numeric_limits<float>::infinity();
-          int chosen = -1;
-          const int cs[2] = {c0, c1};
-          const int rs[2] = {r0, r1};
-          for (int k = 0; k < 2; ++k) {
-            if (cs[k] < 0 || cs[k] >= width || rs[k] < 0 || rs[k] >= height) continue;
-            const float dn = depth.ptr<float>(rs[k])[cs[k]];
-            if (!IsValidDepth(dn)) continue;
-            const float diff = std::abs(dn - dc);
-            if (diff < best) {
-              best = diff;
-              chosen = k;
+        // Of the two pixels at `radius_px` on either side (along the step direction), the valid
+        // one closer in depth (the +side on ties); the immediate neighbours when neither is
+        // valid. The tangent always points towards +col / +row. False when none is valid.
+        auto tangent = [&](int step_col, int step_row, Eigen::Vector3d* t) {
+          for (const int r : {radius_px, 1}) {
+            float best = std::numeric_limits<float>::infinity();
+            int chosen_col = -1, chosen_row = -1, sign = 0;
+            for (const int k : {1, -1}) {
+              const int c = col + k * r * step_col;
+              const int rr = row + k * r * step_row;
+              if (c < 0 || c >= width || rr < 0 || rr >= height) continue;
+              const float dn = depth.ptr<float>(rr)[c];
+              if (!IsValidDepth(dn)) continue;
+              const float diff = std::abs(dn - dc);
+              if (diff < best) {
+                best = diff;
+                chosen_col = c;
+                chosen_row = rr;
+                sign = k;
+              }
             }
+            if (sign != 0) {
+              const Eigen::Vector3d& Y =
+                  points[static_cast<size_t>(chosen_row) * width + chosen_col];
+              *t = sign > 0 ? Eigen::Vector3d(Y - X) : Eigen::Vector3d(X - Y);
+              return true;
+            }
+            if (r == 1) break;
           }
-          if (chosen < 0) return false;
-          const Eigen::Vector3d& Y = points[static_cast<size_t>(rs[chosen]) * width + cs[chosen]];
-          *t = chosen == 0 ? Eigen::Vector3d(Y - X) : Eigen::Vector3d(X - Y);
-          return true;
+          return false;
         };
         Eigen::Vector3d t_col, t_row;
-        if (!tangent(col + 1, row, col - 1, row, &t_col)) continue;
-        if (!tangent(col, row + 1, col, row - 1, &t_row)) continue;
+        if (!tangent(1, 0, &t_col)) continue;
+        if (!tangent(0, 1, &t_row)) continue;
         Eigen::Vector3d n = t_col.cross(t_row);
         const double norm = n.norm();
         if (!(norm > 0.0) || !std::isfinite(norm)) continue;
@@ -325,7 +341,7 @@ OrientedPointCloud FuseDepthMaps(const std::vector<FusionView>& views, const Fus
     v.image = view.image_bgr;
   }
   for (size_t i = 0; i < views.size(); ++i) {
-    data[i].normals = DepthMapNormals(views[i].depth, views[i].camera);
+    data[i].normals = DepthMapNormals(views[i].depth, views[i].camera, options.normal_radius_px);
   }
 
   std::vector<std::vector<std::uint8_t>> consumed(views.size());

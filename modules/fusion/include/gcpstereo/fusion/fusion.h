@@ -34,6 +34,11 @@ struct FusionOptions {
   // (COLMAP: max_normal_error). Degrees. Valid: (0, 180]; 180 turns the test off (but a pixel
   // still needs a defined normal to take part). Default 30.
   double normal_tolerance_deg = 30.0;
+  // [fusion.normal_radius_px] The pixel normals (DepthMapNormals) take their tangents from the
+  // pixels this far away on either side: a longer baseline divides the angular error that depth
+  // noise or label quantisation causes by about this factor (exact depth maps of planes give the
+  // same normal for every radius). Pixels. Valid: [1, 16]. Default 2.
+  int normal_radius_px = 2;
   // [fusion.stride_px] Source pixels are sampled on the grid of columns and rows that are
   // multiples of this (the other views are always looked up at their nearest pixel). 1 = every
   // pixel. Pixels. Valid: [1, 64].
@@ -80,7 +85,8 @@ struct FusionSummary {
 // et al.'s stability-based fusion ("Real-Time Visibility-Based Fusion of Depth Maps", ICCV 2007,
 // where a depth is kept when enough views confirm it), simplified to be deterministic.
 //
-// Algorithm. The normals n_v of every view are computed once (DepthMapNormals). Each pixel of each
+// Algorithm. The normals n_v of every view are computed once (DepthMapNormals with
+// normal_radius_px). Each pixel of each
 // view carries a "consumed" mark, initially clear. For every view s in input order and every
 // source pixel p = (col, row) of s on the stride grid with a valid depth d_s(p), a defined normal
 // and no consumed mark:
@@ -117,13 +123,15 @@ OrientedPointCloud FuseDepthMaps(const std::vector<FusionView>& views, const Fus
 
 // The per-pixel unit normals of a depth map in the WORLD frame, CV_32FC3 (x, y, z), oriented
 // towards the camera (n · (center − X) > 0). With X(c, r) the back-projection of pixel (c, r):
-// the horizontal tangent is the difference to the right or the left neighbour, the vertical one to
-// the lower or the upper neighbour; of each pair the valid neighbour whose depth is closer to the
-// pixel's depth is taken (so a pixel beside a depth step takes its tangent from its own surface);
+// the horizontal tangent is the difference to X(c + radius_px, r) or X(c − radius_px, r), the
+// vertical one to X(c, r + radius_px) or X(c, r − radius_px); of each pair the valid pixel whose
+// depth is closer to the pixel's depth is taken (so a pixel beside a depth step takes its tangent
+// from its own surface), and the immediate neighbours (radius 1) when neither is valid;
 // normal = horizontal × vertical, normalised. NaN in all three channels where the pixel's depth is
 // invalid, where it has no valid horizontal or no valid vertical neighbour, or where the cross
-// product vanishes. Throws Error for a depth map that is not CV_32FC1 or not of the camera's size.
-cv::Mat DepthMapNormals(const cv::Mat& depth, const Camera& camera);
+// product vanishes. Throws Error for a depth map that is not CV_32FC1 or not of the camera's size,
+// or radius_px outside [1, 16].
+cv::Mat DepthMapNormals(const cv::Mat& depth, const Camera& camera, int radius_px = 1);
 
 // Appends ground control points (WORLD coordinates, e.g. a laser scan in the cameras' frame) to a
 // fused cloud: num_views = 0 marks them, sigma = gcps_world.sigma[i] (0 when the cloud has no
