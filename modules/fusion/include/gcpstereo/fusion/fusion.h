@@ -15,7 +15,7 @@
 namespace gcpstereo::fusion {
 
 // Options of the depth-map fusion (FuseDepthMaps). YAML keys fusion.*. Not in the paper (the
-// paper stops at per-view depth maps); the tests follow COLMAP's stereo_fusion options of the same
+// paper stops at per-view depth maps); they follow COLMAP's stereo_fusion options of the same
 // meaning (min_num_pixels, max_depth_error, max_normal_error).
 struct FusionOptions {
   // [fusion.min_views] A source pixel becomes a point when at least this many views agree on it,
@@ -81,15 +81,15 @@ struct FusionSummary {
 
 // Fuses the views' depth maps into one coloured, oriented point cloud in the world frame: the
 // multi-view consistency check of COLMAP's stereo_fusion (Schönberger, Zheng, Frahm, Pollefeys,
-// "Pixelwise View Selection for Unstructured Multi-View Stereo", ECCV 2016, §4.6) and of Merrell
-// et al.'s stability-based fusion ("Real-Time Visibility-Based Fusion of Depth Maps", ICCV 2007,
-// where a depth is kept when enough views confirm it), simplified to be deterministic.
+// "Pixelwise View Selection for Unstructured Multi-View Stereo", ECCV 2016: filtering and
+// fusion) and of Merrell et al.'s stability-based fusion ("Real-Time Visibility-Based Fusion of
+// Depth Maps", ICCV 2007, where a depth is kept when enough views confirm it), simplified to be
+// deterministic.
 //
 // Algorithm. The normals n_v of every view are computed once (DepthMapNormals with
-// normal_radius_px). Each pixel of each
-// view carries a "consumed" mark, initially clear. For every view s in input order and every
-// source pixel p = (col, row) of s on the stride grid with a valid depth d_s(p), a defined normal
-// and no consumed mark:
+// normal_radius_px). Each pixel of each view carries a "consumed" mark, initially clear. For every
+// view s in input order and every source pixel p = (col, row) of s on the stride grid with a valid
+// depth d_s(p), a defined normal and no consumed mark:
 //   X = camera_s.BackProject(p, d_s(p)); count = 1;
 //   for every other view j: project X into j (in front of the camera, inside the image); q = the
 //     nearest pixel; view j agrees when d_j(q) is valid, |z_j(X) − d_j(q)| / d_j(q) <=
@@ -134,7 +134,7 @@ OrientedPointCloud FuseDepthMaps(const std::vector<FusionView>& views, const Fus
 cv::Mat DepthMapNormals(const cv::Mat& depth, const Camera& camera, int radius_px = 1);
 
 // Appends ground control points (WORLD coordinates, e.g. a laser scan in the cameras' frame) to a
-// fused cloud: num_views = 0 marks them, sigma = gcps_world.sigma[i] (0 when the cloud has no
+// fused cloud: num_views = 0 marks them, sigma = gcps_world.sigma[i] (0 when gcps_world has no
 // sigma channel). Normal and colour come from the fused points (num_views > 0) already in the
 // cloud: normal = the normalised mean of the normals of the (up to) 8 nearest fused points
 // (exact KD-tree search), colour = the nearest fused point's colour, so a GCP continues the
