@@ -2,6 +2,7 @@
 #include "gcpstereo/io/point_cloud_io.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/io/atomic_file.h"
 #include "test_data.h"
 
 namespace gcpstereo::io {
@@ -208,6 +210,127 @@ TEST(PointCloudIo, GcpsPlyHoldsWorldPointsAndSigma) {
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(bytes.find("property uchar source\n"), std::string::npos);
   EXPECT_NE(bytes.find("property uchar red\n"), std::string::npos);
+}
+
+OrientedPointCloud RandomOrientedCloud(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> uniform(-20.0f, 20.0f);
+  OrientedPointCloud cloud;
+  for (int i = 0; i < n; ++i) {
+    cloud.points.emplace_back(uniform(rng), uniform(rng), uniform(rng));
+    cloud.normals.push_back(Eigen::Vector3f(uniform(rng), uniform(rng), uniform(rng)).normalized());
+    cloud.colors.emplace_back(static_cast<std::uint8_t>(i % 256),
+                              static_cast<std::uint8_t>((7 * i) % 256),
+                              static_cast<std::uint8_t>(255 - i % 256));
+    cloud.num_views.push_back(static_cast<std::uint16_t>(i % 3 == 0 ? 0 : 1 + i % 11));
+    cloud.sigma.push_back(i % 3 == 0 ? 0.001f * (1 + i % 5) : 0.0f);
+  }
+  cloud.num_views[1] = 65535;  // the whole ushort range
+  return cloud;
+}
+
+std::string OrientedErrorOf(const std::string& path) {
+  try {
+    ReadOrientedPointCloudPly(path);
+  } catch (const IoError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(OrientedPointCloudIo, PlyRoundTripIsExact) {
+  const std::string dir = testing::MakeTempDir("io-fused");
+  const OrientedPointCloud cloud = RandomOrientedCloud(1000, 3);
+  const std::string path = dir + "/fused.ply";
+  WriteOrientedPointCloudPly(path, cloud);
+  EXPECT_FALSE(std::filesystem::exists(path + ".partial"));
+  const OrientedPointCloud back = ReadOrientedPointCloudPly(path);
+  ASSERT_EQ(back.size(), cloud.size());
+  ASSERT_EQ(back.normals.size(), cloud.size());
+  ASSERT_EQ(back.colors.size(), cloud.size());
+  ASSERT_EQ(back.num_views.size(), cloud.size());
+  ASSERT_EQ(back.sigma.size(), cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    ASSERT_EQ(back.points[i], cloud.points[i]) << i;
+    ASSERT_EQ(back.normals[i], cloud.normals[i]) << i;
+    ASSERT_EQ(back.colors[i], cloud.colors[i]) << i;
+    ASSERT_EQ(back.num_views[i], cloud.num_views[i]) << i;
+    ASSERT_EQ(back.sigma[i], cloud.sigma[i]) << i;
+  }
+  // 33 bytes per vertex after the header; the general reader sees the positions too.
+  const std::string bytes = ReadFileBytes(path);
+  const size_t header_end = bytes.find("end_header\n") + std::strlen("end_header\n");
+  EXPECT_EQ(bytes.size() - header_end, 33u * cloud.size());
+  const PointCloud positions = ReadPointCloud(path);
+  ASSERT_EQ(positions.size(), cloud.size());
+  EXPECT_EQ(positions.points[17], cloud.points[17]);
+
+  // An empty cloud round-trips too.
+  WriteOrientedPointCloudPly(dir + "/empty.ply", OrientedPointCloud());
+  EXPECT_TRUE(ReadOrientedPointCloudPly(dir + "/empty.ply").empty());
+}
+
+TEST(OrientedPointCloudIo, TruncatedAndForeignFilesAreRejected) {
+  const std::string dir = testing::MakeTempDir("io-fused-bad");
+  const std::string path = dir + "/fused.ply";
+  WriteOrientedPointCloudPly(path, RandomOrientedCloud(10, 4));
+  const std::string bytes = ReadFileBytes(path);
+
+  WriteRaw(dir + "/truncated.ply", bytes.substr(0, bytes.size() - 5));
+  EXPECT_EQ(
+      OrientedErrorOf(dir + "/truncated.ply"),
+      dir + "/truncated.ply: truncated: 10 vertices need 330 bytes of data, the file has 325");
+
+  WriteRaw(dir + "/long.ply", bytes + "xy");
+  EXPECT_EQ(OrientedErrorOf(dir + "/long.ply"),
+            dir + "/long.ply: 2 bytes after the 10 vertices the header announces");
+
+  WriteRaw(dir + "/header.ply", bytes.substr(0, bytes.find("end_header")));
+  EXPECT_EQ(OrientedErrorOf(dir + "/header.ply"),
+            dir + "/header.ply: PLY header without end_header (truncated or not a PLY file)");
+
+  WriteRaw(dir + "/not.ply", "hello\n");
+  EXPECT_EQ(OrientedErrorOf(dir + "/not.ply"), dir + "/not.ply: not a PLY file (no 'ply' line)");
+
+  // A plain point cloud is not a fused cloud.
+  WritePointCloudPly(dir + "/xyz.ply", RandomCloud(5, true, false, 1));
+  EXPECT_EQ(OrientedErrorOf(dir + "/xyz.ply"),
+            dir +
+                "/xyz.ply: not a fused-cloud PLY: header line 'property float sigma' where "
+                "'property float nx' was expected");
+
+  std::string ascii = bytes;
+  ascii.replace(ascii.find("binary_little_endian"), std::strlen("binary_little_endian"), "ascii");
+  WriteRaw(dir + "/ascii.ply", ascii);
+  EXPECT_EQ(OrientedErrorOf(dir + "/ascii.ply"),
+            dir +
+                "/ascii.ply: not a fused-cloud PLY: header line 'format ascii 1.0' where "
+                "'format binary_little_endian 1.0' was expected");
+
+  std::string count = bytes;
+  count.replace(count.find("element vertex 10"), std::strlen("element vertex 10"),
+                "element vertex -3");
+  WriteRaw(dir + "/count.ply", count);
+  EXPECT_EQ(OrientedErrorOf(dir + "/count.ply"),
+            dir +
+                "/count.ply: not a fused-cloud PLY: header line 'element vertex -3' where "
+                "'element vertex <count>' was expected");
+
+  EXPECT_NE(OrientedErrorOf(dir + "/missing.ply").find(dir + "/missing.ply: "), std::string::npos);
+}
+
+TEST(OrientedPointCloudIo, ChannelLengthMismatchIsRejected) {
+  const std::string dir = testing::MakeTempDir("io-fused-mismatch");
+  OrientedPointCloud cloud = RandomOrientedCloud(4, 5);
+  cloud.num_views.pop_back();
+  try {
+    WriteOrientedPointCloudPly(dir + "/fused.ply", cloud);
+    FAIL() << "no error";
+  } catch (const IoError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              dir + "/fused.ply: oriented point cloud has 4 points but 3 view counts");
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/fused.ply"));
 }
 
 }  // namespace

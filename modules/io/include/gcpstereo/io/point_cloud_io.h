@@ -28,4 +28,18 @@ PointCloud ReadPointCloud(const std::string& path);
 // (0 lidar, 1 depth_map, 2 stereo), int col, int row and float depth. Atomic.
 void WriteGcpsPly(const std::string& path, const GcpSet& gcps, const Camera& reference);
 
+// Writes a fused cloud (fused.ply): binary little-endian PLY with one `vertex` element of the
+// properties, in this order, float x, y, z (world frame), float nx, ny, nz (unit normal), uchar
+// red, green, blue, ushort views (OrientedPointCloud::num_views; 0 = a GCP) and float sigma
+// (33 bytes per vertex). MeshLab, CloudCompare and Open3D read it as a coloured cloud with
+// normals. Atomic. Throws IoError when a channel's length differs from the point count.
+void WriteOrientedPointCloudPly(const std::string& path, const OrientedPointCloud& cloud);
+
+// Reads what WriteOrientedPointCloudPly writes: the same format line and properties in the same
+// order ("comment" and "obj_info" lines are skipped; any other header is rejected: this is not a
+// general PLY reader, see ReadPointCloud). Throws IoError naming the file for an unreadable file,
+// a header that differs (naming the line), a missing end_header, and vertex data shorter
+// ("truncated") or longer than the vertex count says.
+OrientedPointCloud ReadOrientedPointCloudPly(const std::string& path);
+
 }  // namespace gcpstereo::io
