@@ -126,6 +126,85 @@ RunSummary Finish(const LoadedConfig& config, OutputFolder& out, const Timer& to
   return summary;
 }
 
+// What one view's run writes besides the report (WriteViewOutputs).
+struct ViewOutputs {
+  const DepthMaps& result;      // empty when the run stopped after the propagation
+  const DepthMaps& propagated;  // D̂; empty without GCPs
+  const GcpSet& gcps;
+  const MeshResult& mesh;
+  const NamedImages& stage_previews;       // left-right check, plane fit
+  const NamedImages& evaluation_previews;  // after the mesh's picture
+};
+
+// Writes the maps, D̂ and the GCPs, then (timed as the "mesh" stage) the mesh and point cloud,
+// then (the "write" stage) the previews, joining `obj_export` (mesh.obj written in the
+// background); returns the names of the previews written.
+std::vector<std::string> WriteViewOutputs(OutputFolder& out, json& stages,
+                                          const PipelineConfig& options, const Dataset& dataset,
+                                          const LabelSpace& labels, const ViewOutputs& outputs,
+                                          std::future<double>* obj_export) {
+  const View& reference = dataset.reference;
+  const cv::Mat& depth = outputs.result.depth;
+  if (!depth.empty()) io::WritePfm(out.Path("depth.pfm"), depth);
+  if (!outputs.result.disparity.empty()) {
+    io::WritePfm(out.Path("disparity.pfm"), outputs.result.disparity);
+  }
+  WritePriorAndGcps(out, outputs.propagated, outputs.gcps, reference.camera);
+  NamedImages previews = outputs.stage_previews;
+  if (!depth.empty() && (options.output.mesh || options.output.points)) {
+    StageClock clock(&stages, "mesh");
+    WriteMeshOutputs(out, options, reference, outputs.mesh.triangles, depth, &previews);
+    clock.Done(outputs.mesh.stage_report);
+  }
+  StageClock write_clock(&stages, "write");
+  previews.insert(previews.end(), outputs.evaluation_previews.begin(),
+                  outputs.evaluation_previews.end());
+  const std::vector<std::string> images = WritePreviews(out, options, dataset, labels, outputs.gcps,
+                                                        depth, outputs.propagated.depth, previews);
+  json write_report = json::object();
+  if (obj_export->valid()) write_report["mesh_obj_export_seconds"] = obj_export->get();
+  write_clock.Done(write_report);
+  return images;
+}
+
+// The label map after the optimisation and the stages that refine it.
+struct OptimizedLabels {
+  cv::Mat labels;
+  NamedImages previews;  // left_right_check.png, plane_fit.png (empty when not run)
+};
+
+// 4–5c. The prior of the GCP energy, matching costs and global optimisation tile by tile (memory
+// follows the tile), then the left-right check and the plane fit, each refining the label map of
+// the one before.
+OptimizedLabels OptimizeLabels(json& stages, const PipelineConfig& options, const LoadResult& load,
+                               const LabelSpace& labels, const GcpSet& gcps,
+                               const cv::Mat& propagated) {
+  const Dataset& dataset = load.dataset;
+  const EnergyPrior prior = EnergyPriorStage(options, dataset.reference, gcps, propagated);
+  const PairLabels pair = PairLabelsOf(dataset, labels, load.cost_method);
+  const OptimizeInputs inputs{options, dataset, load.cost_method, labels, gcps, prior, pair};
+  OptimizeResult optimized =
+      Timed(stages, "cost_and_optimization", [&] { return OptimizeStage(inputs); });
+  OptimizedLabels result{optimized.optimized.labels, {}};
+  LeftRightCheckResult left_right;
+  if (options.optimizer.left_right_check) {
+    left_right = Timed(stages, "left_right_check", [&] {
+      return LeftRightCheckStage(options, dataset, labels, gcps, pair, optimized);
+    });
+    result.labels = left_right.labels;
+  }
+  PlaneFitResult plane_fit;
+  if (options.optimizer.plane_fit) {
+    plane_fit = Timed(stages, "plane_fit", [&] {
+      return PlaneFitStage(options, dataset, labels, result.labels, left_right);
+    });
+    result.labels = plane_fit.labels;
+  }
+  result.previews = {{"left_right_check.png", left_right.preview},
+                     {"plane_fit.png", plane_fit.preview}};
+  return result;
+}
+
 }  // namespace
 
 RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
@@ -173,52 +252,22 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
                         [&] { return PropagationStage(options, reference, gcps, labels); });
   }
   const DepthMaps propagated = ToDepthMaps(propagation.prior, labels, dataset);
-  if (stop_after == "propagation") {
-    const EvaluationResult evaluation = Timed(stages, "evaluation", [&] {
-      return EvaluationStage(dataset, gcp_stage.gcp, DepthMaps(), propagated);
-    });
-    report["metrics"] = evaluation.metrics;
-    WritePriorAndGcps(out, propagated, gcps, reference.camera);
-    StageClock write_clock(&stages, "write");
-    const std::vector<std::string> images = WritePreviews(
-        out, options, dataset, labels, gcps, cv::Mat(), propagated.depth, evaluation.previews);
-    write_clock.Done();
-    return Finish(config, out, total, &report, images);
-  }
 
-  // 4–5. Matching costs and global optimisation, tile by tile (memory follows the tile), then
-  // the left-right check and the plane fit, each refining the label map of the one before.
-  const EnergyPrior energy_prior = EnergyPriorStage(options, reference, gcps, propagation.prior);
-  const PairLabels pair = PairLabelsOf(dataset, labels, load.cost_method);
-  const OptimizeInputs optimize_inputs{options,      dataset, load.cost_method, labels, gcps,
-                                       energy_prior, pair};
-  OptimizeResult optimized =
-      Timed(stages, "cost_and_optimization", [&] { return OptimizeStage(optimize_inputs); });
-  cv::Mat label_map = optimized.optimized.labels;
-  LeftRightCheckResult left_right;
-  if (options.optimizer.left_right_check) {
-    left_right = Timed(stages, "left_right_check", [&] {
-      return LeftRightCheckStage(options, dataset, labels, gcps, pair, optimized);
-    });
-    label_map = left_right.labels;
-  }
-  PlaneFitResult plane_fit;
-  if (options.optimizer.plane_fit) {
-    plane_fit = Timed(stages, "plane_fit", [&] {
-      return PlaneFitStage(options, dataset, labels, label_map, left_right);
-    });
-    label_map = plane_fit.labels;
-  }
-
-  // 6. Depth (and disparity) maps and the mesh, whose OBJ export runs in the background while
-  // the evaluation, the previews and the other files are produced (joined, and any error
-  // rethrown, before the outputs move).
-  const DepthMaps result = DepthMapsStage(label_map, labels, dataset);
-  const MeshResult mesh = MeshStage(options, reference, result.depth);
+  // 4–6. Costs and optimisation, then the depth (and disparity) maps and the mesh, whose OBJ
+  // export runs in the background while the evaluation, the previews and the other files are
+  // produced (joined, and any error rethrown, before the outputs move).
+  OptimizedLabels optimized;
+  DepthMaps result;
+  MeshResult mesh;
   std::future<double> obj_export;
-  if (options.output.mesh) {
-    obj_export =
-        std::async(std::launch::async, WriteMeshObj, out.Path("mesh.obj"), &mesh.triangles);
+  if (stop_after != "propagation") {
+    optimized = OptimizeLabels(stages, options, load, labels, gcps, propagation.prior);
+    result = DepthMapsStage(optimized.labels, labels, dataset);
+    mesh = MeshStage(options, reference, result.depth);
+    if (options.output.mesh) {
+      obj_export =
+          std::async(std::launch::async, WriteMeshObj, out.Path("mesh.obj"), &mesh.triangles);
+    }
   }
 
   // 7. Evaluation against whatever ground truth the data set carries.
@@ -227,24 +276,10 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
   });
   report["metrics"] = evaluation.metrics;
 
-  // 8. Outputs, staged and moved into place at the end: the maps, the mesh, then the previews.
-  io::WritePfm(out.Path("depth.pfm"), result.depth);
-  if (dataset.rectified) io::WritePfm(out.Path("disparity.pfm"), result.disparity);
-  WritePriorAndGcps(out, propagated, gcps, reference.camera);
-  NamedImages previews = {{"left_right_check.png", left_right.preview},
-                          {"plane_fit.png", plane_fit.preview}};
-  if (options.output.mesh || options.output.points) {
-    StageClock clock(&stages, "mesh");
-    WriteMeshOutputs(out, options, reference, mesh.triangles, result.depth, &previews);
-    clock.Done(mesh.stage_report);
-  }
-  StageClock write_clock(&stages, "write");
-  previews.insert(previews.end(), evaluation.previews.begin(), evaluation.previews.end());
-  const std::vector<std::string> images =
-      WritePreviews(out, options, dataset, labels, gcps, result.depth, propagated.depth, previews);
-  json write_report = json::object();
-  if (obj_export.valid()) write_report["mesh_obj_export_seconds"] = obj_export.get();
-  write_clock.Done(write_report);
+  // 8. Outputs, staged and moved into place at the end.
+  const std::vector<std::string> images = WriteViewOutputs(
+      out, stages, options, dataset, labels,
+      {result, propagated, gcps, mesh, optimized.previews, evaluation.previews}, &obj_export);
   return Finish(config, out, total, &report, images);
 }
 
