@@ -59,6 +59,20 @@ SurfaceOptions FastOptions() {
   return options;
 }
 
+// The sphere's mesh, computed once for the tests that only read it.
+struct SphereResult {
+  TriangleMesh mesh;
+  SurfaceSummary summary;
+};
+const SphereResult& Sphere() {
+  static const SphereResult result = [] {
+    SphereResult r;
+    r.mesh = ReconstructSurface(UnitSphere(10000), FastOptions(), &r.summary);
+    return r;
+  }();
+  return result;
+}
+
 std::string ErrorText(const SurfaceOptions& options) {
   try {
     options.Check();
@@ -78,10 +92,10 @@ std::string ErrorText(const OrientedPointCloud& cloud) {
 }
 
 TEST(SurfaceReconstruction, SphereVerticesOnTheSurfaceFacesOutward) {
-  SurfaceSummary summary;
-  const TriangleMesh mesh = ReconstructSurface(UnitSphere(20000), FastOptions(), &summary);
+  const TriangleMesh& mesh = Sphere().mesh;
+  const SurfaceSummary& summary = Sphere().summary;
   ASSERT_GT(mesh.faces.size(), 1000u);
-  EXPECT_EQ(summary.input_points, 20000);
+  EXPECT_EQ(summary.input_points, 10000);
   EXPECT_EQ(summary.vertices, static_cast<std::int64_t>(mesh.vertices.size()));
   EXPECT_EQ(summary.faces, static_cast<std::int64_t>(mesh.faces.size()));
   EXPECT_EQ(summary.trimmed_faces, summary.poisson_faces - summary.faces);
@@ -102,7 +116,7 @@ TEST(SurfaceReconstruction, SphereVerticesOnTheSurfaceFacesOutward) {
 }
 
 TEST(SurfaceReconstruction, ColoursOfTheNearestInputPoint) {
-  const TriangleMesh mesh = ReconstructSurface(UnitSphere(20000), FastOptions());
+  const TriangleMesh& mesh = Sphere().mesh;
   ASSERT_EQ(mesh.colors.size(), mesh.vertices.size());
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
     const float z = mesh.vertices[v].z();
@@ -113,7 +127,7 @@ TEST(SurfaceReconstruction, ColoursOfTheNearestInputPoint) {
     }
   }
   // Without colours in the input, none in the output.
-  OrientedPointCloud uncoloured = UnitSphere(5000);
+  OrientedPointCloud uncoloured = PlanePatch(21);
   uncoloured.colors.clear();
   EXPECT_TRUE(ReconstructSurface(uncoloured, FastOptions()).colors.empty());
 }
@@ -162,10 +176,11 @@ TEST(SurfaceReconstruction, ExplicitTrimDistance) {
 }
 
 TEST(SurfaceReconstruction, SameOutputWhateverTheThreadCount) {
-  const OrientedPointCloud cloud = UnitSphere(8000);
+  const OrientedPointCloud cloud = UnitSphere(3000);
   SurfaceOptions one = FastOptions();
+  one.depth = 6;
   one.threads = 1;
-  SurfaceOptions two = FastOptions();
+  SurfaceOptions two = one;
   two.threads = 2;
   const TriangleMesh a = ReconstructSurface(cloud, one);
   const TriangleMesh b = ReconstructSurface(cloud, two);
@@ -218,15 +233,13 @@ TEST(SurfaceReconstruction, InputErrors) {
   EXPECT_EQ(ErrorText(cloud), "ReconstructSurface: the point cloud has 100 points but 99 colors");
   cloud = PlanePatch(10);
   cloud.num_views.assign(3, 2);
-  EXPECT_EQ(ErrorText(cloud),
-            "ReconstructSurface: the point cloud has 100 points but 3 num_views");
+  EXPECT_EQ(ErrorText(cloud), "ReconstructSurface: the point cloud has 100 points but 3 num_views");
   cloud = PlanePatch(10);
   cloud.sigma.assign(101, 0.0f);
   EXPECT_EQ(ErrorText(cloud), "ReconstructSurface: the point cloud has 100 points but 101 sigma");
   cloud = PlanePatch(10);
   cloud.points[7].x() = std::nanf("");
-  EXPECT_EQ(ErrorText(cloud),
-            "ReconstructSurface: point 7 has a non-finite position or normal");
+  EXPECT_EQ(ErrorText(cloud), "ReconstructSurface: point 7 has a non-finite position or normal");
 }
 
 }  // namespace

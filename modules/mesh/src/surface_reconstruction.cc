@@ -167,16 +167,18 @@ nlohmann::json SurfaceSummary::ToJson() const {
   j["trimmed_faces"] = trimmed_faces;
   j["median_spacing"] = median_spacing;
   j["trim_distance"] = trim_distance;
+  j["poisson_seconds"] = poisson_seconds;
   j["seconds"] = seconds;
   return j;
 }
 
 std::string SurfaceSummary::FullReport() const {
   std::ostringstream s;
-  s << "Scene mesh: " << input_points << " points -> Poisson " << poisson_vertices
-    << " vertices, " << poisson_faces << " faces; trimmed " << trimmed_faces
-    << " faces farther than " << trim_distance << " (median spacing " << median_spacing
-    << ") -> " << vertices << " vertices, " << faces << " faces; " << seconds << " s";
+  s << "Scene mesh: " << input_points << " points -> Poisson " << poisson_vertices << " vertices, "
+    << poisson_faces << " faces; trimmed " << trimmed_faces << " faces farther than "
+    << trim_distance << " (median spacing " << median_spacing << ") -> " << vertices
+    << " vertices, " << faces << " faces; " << seconds << " s (Poisson " << poisson_seconds
+    << " s)";
   return s.str();
 }
 
@@ -211,6 +213,7 @@ TriangleMesh ReconstructSurface(const OrientedPointCloud& cloud, const SurfaceOp
   // The Poisson solve (one thread, see the top of this file).
   pcl::PointCloud<pcl::PointNormal> poisson_points;
   std::vector<pcl::Vertices> polygons;
+  const Timer poisson_timer;
   {
     static std::mutex poisson_mutex;
     const std::lock_guard<std::mutex> lock(poisson_mutex);
@@ -223,6 +226,7 @@ TriangleMesh ReconstructSurface(const OrientedPointCloud& cloud, const SurfaceOp
     poisson.reconstruct(poisson_points, polygons);
   }
   oriented.reset();
+  const double poisson_seconds = poisson_timer.ElapsedSeconds();
 
   // Nearest input point of every Poisson vertex: its colour and its distance for the trim.
   pcl::KdTreeFLANN<pcl::PointXYZ> tree;
@@ -293,6 +297,7 @@ TriangleMesh ReconstructSurface(const OrientedPointCloud& cloud, const SurfaceOp
     summary->trimmed_faces = poisson_faces - summary->faces;
     summary->median_spacing = median_spacing;
     summary->trim_distance = trim_distance;
+    summary->poisson_seconds = poisson_seconds;
     summary->seconds = timer.ElapsedSeconds();
   }
   return mesh;

@@ -50,9 +50,10 @@ struct SurfaceSummary {
   std::int64_t vertices = 0;          // of the output mesh
   std::int64_t faces = 0;             // of the output mesh
   std::int64_t trimmed_faces = 0;     // poisson_faces − faces
-  double median_spacing = 0.0;        // median nearest-neighbour distance of the input (scene units)
-  double trim_distance = 0.0;         // the trim distance used (scene units)
-  double seconds = 0.0;               // wall-clock time
+  double median_spacing = 0.0;   // median nearest-neighbour distance of the input (scene units)
+  double trim_distance = 0.0;    // the trim distance used (scene units)
+  double poisson_seconds = 0.0;  // wall-clock time of the Poisson solve alone
+  double seconds = 0.0;          // wall-clock time of the whole call
 
   nlohmann::json ToJson() const;
   std::string FullReport() const;
