@@ -15,9 +15,10 @@ find_package(SuiteSparse REQUIRED)          # cmake/FindSuiteSparse.cmake: 5.x s
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(MAXFLOW REQUIRED IMPORTED_TARGET maxflow)   # Boykov–Kolmogorov max-flow
 # PCL (and through it VTK) is heavy: ask only for what is used (io: the point-cloud reader;
-# registration, filters, kdtree: the scan registration of gcp/sweep_motion.cc), and link it
-# privately to the two libraries that include it.
-find_package(PCL 1.10 REQUIRED COMPONENTS common io registration filters kdtree search)
+# registration, filters, kdtree: the scan registration of gcp/sweep_motion.cc; surface: the
+# Poisson scene mesh of mesh/surface_reconstruction.cc), and link it privately to the libraries
+# that include it.
+find_package(PCL 1.10 REQUIRED COMPONENTS common io registration filters kdtree search surface)
 if(GCPSTEREO_BUILD_TESTS)
   find_package(GTest REQUIRED)
 endif()
