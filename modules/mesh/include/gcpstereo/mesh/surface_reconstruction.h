@@ -76,6 +76,7 @@ struct SurfaceSummary {
 // Faces are counter-clockwise seen from the side the normals point to. Vertices no face uses
 // after trimming are dropped; the rest keep their order. The output is the same for the same
 // input, whatever SurfaceOptions::threads.
+// A cloud without extent (all points equal) gives an empty mesh, as the summary shows.
 // Throws Error for an empty cloud, a cloud without normals, channels of the wrong size or
 // non-finite coordinates; ConfigError (options.Check()) for bad options.
 TriangleMesh ReconstructSurface(const OrientedPointCloud& cloud, const SurfaceOptions& options,
