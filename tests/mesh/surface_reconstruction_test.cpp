@@ -192,6 +192,21 @@ TEST(SurfaceReconstruction, SameOutputWhateverTheThreadCount) {
   EXPECT_EQ(b.faces, c.faces);
 }
 
+TEST(SurfaceReconstruction, CloudWithoutExtentGivesAnEmptyMesh) {
+  // An expected outcome, not an error: the summary says there is nothing to mesh.
+  OrientedPointCloud cloud;
+  for (int i = 0; i < 5; ++i) {
+    cloud.points.emplace_back(1.0f, 2.0f, 3.0f);
+    cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
+  }
+  SurfaceSummary summary;
+  const TriangleMesh mesh = ReconstructSurface(cloud, FastOptions(), &summary);
+  EXPECT_TRUE(mesh.vertices.empty());
+  EXPECT_TRUE(mesh.faces.empty());
+  EXPECT_EQ(summary.input_points, 5);
+  EXPECT_EQ(summary.faces, 0);
+}
+
 TEST(SurfaceReconstruction, OptionErrors) {
   EXPECT_EQ(ErrorText(SurfaceOptions{}), "(no error)");
   SurfaceOptions options;

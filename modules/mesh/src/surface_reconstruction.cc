@@ -35,14 +35,24 @@
 // PCL is already a dependency (pcl_surface is part of libpcl-dev): PCL it is.
 //
 // Threads: PCL's Poisson with 2 threads gave the same vertex set in a different order on two
-// runs of the same input, and a mesh 2 vertices / 4 faces different from the 1-thread solve
-// (above); it was not faster on this machine either. The solve therefore runs on one thread
-// (reproducible bytes, house rule 6); SurfaceOptions::threads only drives the nearest-point
-// queries. PCL's Poisson also keeps static state (TreeNodeData::UseIndex, the node allocator),
-// so concurrent calls are serialised by a mutex.
+// runs of the same input (the box, `cmp` of the PLY files; sorted vertices identical), and a mesh
+// different from the 1-thread solve: 458 760 vs 458 762 vertices on the courtyard case above,
+// 1 756 257 vs 1 756 457 on the 2 M-point case below. It was 1.3× faster on 2 M points and slower
+// on 300 000 (a shared machine: loads of 3–8). The solve therefore runs on one thread
+// (reproducible bytes whatever the thread count, house rule 6); SurfaceOptions::threads only
+// drives the nearest-point queries. PCL's Poisson also keeps static state
+// (TreeNodeData::UseIndex, the node allocator), so concurrent calls are serialised by a mutex.
 //
-// Size: 2 000 000 points (the same mesh, 3 cm noise), depth 10: see the figures in the commit
-// message of this file and in SurfaceSummary::seconds of a run.
+// Size and time: 2 000 000 points sampled on the same courtyard mesh (3 cm noise),
+// ReconstructSurface with the defaults (threads 0) on this machine at a load of ~3 on its 2 cores
+// (/tmp/wtmesh_bench/drive big.ply DEPTH 0, not kept; Poisson time of PCL alone in brackets):
+//   depth 10: 3 512 612 Poisson faces, 3 499 359 kept, 96 s (Poisson 93 s), peak RSS 1.4 GB
+//   depth  9:   797 436 Poisson faces,   783 696 kept, 23 s (Poisson 20 s), peak RSS 0.76 GB
+// PCL alone at depth 10: 1 thread 116 s, 2 threads 89 s (at loads of 5–8), 1.2 GB. The Poisson
+// solve is nearly all of the time and grows ~4× per level; the nearest-point queries, median
+// spacing and trimming take ~3 s. So a 2 M-point scene meets "well under 60 s" at depth 9, not
+// at the default depth 10 on a loaded 2-core machine; `perf` shows no single hot spot in PCL's
+// solver (octree neighbour look-ups, constraint updates, iso-surface extraction).
 #include "gcpstereo/mesh/surface_reconstruction.h"
 
 #include <algorithm>
