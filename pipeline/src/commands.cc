@@ -14,6 +14,7 @@
 #include "gcpstereo/core/system.h"
 #include "gcpstereo/pipeline/pipeline_config.h"
 #include "gcpstereo/pipeline/run.h"
+#include "gcpstereo/pipeline/scene.h"
 #include "gcpstereo/synth/generator.h"
 #include "gcpstereo/synth/writer.h"
 
@@ -27,6 +28,18 @@ int Run(const RunArgs& args, bool log_level_from_command_line) {
       pipeline::RunPipeline(config, args.output_dir, args.config_path);
   std::printf("%s", summary.terminal_summary.c_str());
   std::printf("gcpstereo run: done in %.1f s, peak memory %.0f MB; outputs in %s\n",
+              summary.total_seconds, summary.peak_memory_bytes / 1e6, summary.output_dir.c_str());
+  return 0;
+}
+
+int Fuse(const FuseArgs& args) {
+  pipeline::FuseRequest request;
+  request.view_dirs = args.view_dirs;
+  request.output_dir = args.output_dir;
+  request.overrides = args.overrides;
+  const pipeline::RunSummary summary = pipeline::FuseViewFolders(request);
+  std::printf("%s", summary.terminal_summary.c_str());
+  std::printf("gcpstereo fuse: done in %.1f s, peak memory %.0f MB; outputs in %s\n",
               summary.total_seconds, summary.peak_memory_bytes / 1e6, summary.output_dir.c_str());
   return 0;
 }

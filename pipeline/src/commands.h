@@ -22,6 +22,13 @@ struct RunArgs {
 };
 int Run(const RunArgs& args, bool log_level_from_command_line);
 
+struct FuseArgs {
+  std::vector<std::string> view_dirs;
+  std::string output_dir;
+  std::vector<std::string> overrides;
+};
+int Fuse(const FuseArgs& args);
+
 struct SynthArgs {
   std::string preset;
   std::string output_dir;

@@ -1,5 +1,5 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
-// The gcpstereo command line (../shared/CONTRACT.md): run, synth, eval, demo, keys.
+// The gcpstereo command line (../shared/CONTRACT.md): run, fuse, synth, eval, demo, keys.
 #include <unistd.h>
 
 #include <algorithm>
@@ -70,6 +70,24 @@ int main(int argc, char** argv) {
       "Outputs: depth.pfm, disparity.pfm (rectified data), gcps.ply, mesh.ply, mesh.obj, "
       "report.json,\neffective_config.yaml, *.png previews, index.html and run.log.");
 
+  gcpstereo::cli::FuseArgs fuse_args;
+  CLI::App* fuse = app.add_subcommand(
+      "fuse",
+      "fuse finished per-view output folders into one scene model (what a scene run does after "
+      "its views)");
+  fuse->add_option("views", fuse_args.view_dirs, "per-view output folders (OUT/views/NAME)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  fuse->add_option("-o,--output", fuse_args.output_dir, "output folder (created if missing)")
+      ->required()
+      ->check(kOutputFolder);
+  fuse->add_option("--set", fuse_args.overrides,
+                   "override one dotted key of the first view's configuration, KEY=VALUE "
+                   "(fusion.*, scene_mesh.*, eval.scene.*); repeatable");
+  fuse->footer(
+      "Outputs: fused.ply, mesh.ply, mesh.obj, report.json, effective_config.yaml, index.html, "
+      "*.png\npictures and run.log. Folders of different scenes or cameras are refused.");
+
   gcpstereo::cli::SynthArgs synth_args;
   CLI::App* synth =
       app.add_subcommand("synth", "write a synthetic data set with exact ground truth");
@@ -130,6 +148,7 @@ int main(int argc, char** argv) {
     gcpstereo::SetProgressBarsEnabled(!quiet);
     gcpstereo::SetLogLevel(!log_level.empty() ? log_level : (quiet ? "warn" : "info"));
     if (run->parsed()) return gcpstereo::cli::Run(run_args, !log_level.empty() || quiet);
+    if (fuse->parsed()) return gcpstereo::cli::Fuse(fuse_args);
     if (synth->parsed()) return gcpstereo::cli::Synth(synth_args);
     if (demo->parsed()) return gcpstereo::cli::Demo(demo_args);
     if (keys->parsed()) return gcpstereo::cli::Keys();

@@ -37,11 +37,36 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("dataset.path", &dataset.path, {},
          {"the data set's folder (kitti_raw: <date>/<date>_drive_NNNN_sync); relative paths are "
           "relative to the working directory"});
-  s->Add("dataset.reference", &dataset.reference, {},
-         {"reference view: strecha 0005; middlebury im2, scene1.row3.col3, view1; kitti_raw the "
-          "frame 0000000010"});
-  s->Add("dataset.neighbors", &dataset.neighbors, {},
-         {"views used for matching; empty = all other views (ignored for kitti_raw)"});
+  s->AddListOrScalar(
+      "dataset.reference", &dataset.references, {},
+      {"reference view: strecha 0005; middlebury im2, scene1.row3.col3, view1; kitti_raw the "
+       "frame 0000000010. A list of names or all = a whole scene: each reference's depth map into "
+       "OUT/views/<name>/, fused and meshed into OUT/ (strecha, middlebury)"});
+  s->AddListOrScalar("dataset.neighbors", &dataset.neighbors, {"auto"},
+                     {"views used for matching; empty = all other views; auto = the "
+                      "dataset.neighbor_count best by triangulation angle and shared visible area "
+                      "(ignored for kitti_raw)"});
+  s->Add("dataset.neighbor_count", &dataset.neighbor_selection.count, Range::Between(1, 64),
+         {"dataset.neighbors: auto: how many neighbours each reference gets (fewer when fewer "
+          "views see its scene)"});
+  s->Add("dataset.neighbor_selection.min_angle_deg", &dataset.neighbor_selection.min_angle_deg,
+         Range{0.0, 90.0, false, false},
+         {"dataset.neighbors: auto: triangulation angle below which a shared point counts nothing "
+          "(a near-duplicate view)",
+          "deg", "θ_min"});
+  s->Add("dataset.neighbor_selection.optimal_angle_deg",
+         &dataset.neighbor_selection.optimal_angle_deg, Range{0.0, 90.0, false, false},
+         {"dataset.neighbors: auto: triangulation angle from which a shared point counts fully",
+          "deg", "θ_opt"});
+  s->Add("dataset.neighbor_selection.max_angle_deg", &dataset.neighbor_selection.max_angle_deg,
+         Range{0.0, 90.0, false, false},
+         {"dataset.neighbors: auto: triangulation angle beyond which a shared point counts less "
+          "and less (the views see the surface too differently)",
+          "deg", "θ_max"});
+  s->Add("dataset.neighbor_selection.grid_step_px", &dataset.neighbor_selection.grid_step_px,
+         Range::Between(1, 1024),
+         {"dataset.neighbors: auto without scan points: reference pixels sampled every n",
+          "px"});
   s->Add("dataset.scale", &dataset.scale, Range{0.0, 1.0, false, true},
          {"image scale before processing (fountain-P11 in the paper: 0.5)"});
 
@@ -399,6 +424,52 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("mesh.preview.supersampling", &mesh.preview.supersampling, Range::Between(1, 4),
          {"mesh.png anti-aliasing samples per pixel side"});
 
+  s->Add("eval.scene.gt_mesh", &eval.scene.gt_mesh, {},
+         {"whole scenes: the true surface as a PLY mesh (world coordinates) for accuracy, "
+          "completeness and F-score; empty = <dataset.path>/gt/mesh.ply when it exists"});
+  s->Add("eval.scene.gt_points", &eval.scene.gt_points, {},
+         {"whole scenes: a laser scan of the surface (PLY/PCD, world coordinates) scored against "
+          "too; empty = <dataset.path>/gt/laser.ply when it exists"});
+  s->Add("eval.scene.max_samples", &eval.scene.max_samples, Range::Between(1000, 100000000),
+         {"whole scenes: at most this many samples of each surface compared (the mesh sampled "
+          "every 2.5 mm, the fused points themselves, up to this count)"});
+  s->Add("eval.scene.view_histograms", &eval.scene.view_histograms,
+         {"whole scenes: the σ-histogram of the scene mesh rendered into every view with "
+          "ground-truth depth and sigma"});
+
+  // fusion.*: the scene's depth-map fusion (fusion/fusion.h).
+  s->Add("fusion.min_views", &fusion.min_views, Range::Between(1, 64),
+         {"keep a pixel's point where at least this many views (its own included) agree on it"});
+  s->Add("fusion.depth_tolerance", &fusion.depth_tolerance, Range{0.0, 1.0, false, true},
+         {"agreement: relative depth difference |z − z'| / z' at most this"});
+  s->Add("fusion.normal_tolerance_deg", &fusion.normal_tolerance_deg,
+         Range{0.0, 180.0, false, true},
+         {"agreement: angle between the two depth maps' normals at most this", "deg"});
+  s->Add("fusion.normal_radius_px", &fusion.normal_radius_px, Range::Between(1, 16),
+         {"the depth maps' normals from neighbours this far on each side (larger = less noise)",
+          "px"});
+  s->Add("fusion.stride_px", &fusion.stride_px, Range::Between(1, 64),
+         {"source pixels sampled every n pixels (1 = all)", "px"});
+  s->Add("fusion.input", &fusion_input, {"depth", "propagated"},
+         {"what is fused of each view: its depth.pfm, or its propagated_depth.pfm (D̂ alone, "
+          "from views run with runtime.stop_after: propagation)"});
+  s->Add("fusion.include_gcps", &fusion_include_gcps,
+         {"the views' GCPs (gcps.ply) join the fused cloud with their sigma"});
+
+  // scene_mesh.*: the scene's surface reconstruction (mesh/surface_reconstruction.h).
+  s->Add("scene_mesh.depth", &scene_mesh.depth, Range::Between(5, 14),
+         {"octree depth of the screened Poisson reconstruction: finest cell 1.1 × the cloud's "
+          "largest side / 2^depth (finer = more detail, slower)"});
+  s->Add("scene_mesh.point_weight", &scene_mesh.point_weight, Range::Between(0.0, 1000.0),
+         {"screening weight of screened Poisson (pulls the surface onto the points); 0 = "
+          "unscreened",
+          "", "α"});
+  s->Add("scene_mesh.trim_distance", &scene_mesh.trim_distance, Range::AtLeast(0.0),
+         {"remove faces with a vertex farther than this from every fused point (the closed "
+          "Poisson surface over holes and far from the data); 0 = automatic, max(4 × median "
+          "point spacing, 2 × finest cell)",
+          "m"});
+
   s->Add("eval.lidar_holdout", &eval.lidar_holdout,
          {"score against held-out LiDAR points: a checkerboard of blocks splits the projected "
           "scan into GCPs and scoring points"});
@@ -439,9 +510,38 @@ void PipelineConfig::Check() const {
   if (dataset.path.empty()) {
     throw ConfigError("dataset.path is required (the data set's folder)");
   }
-  if (dataset.reference.empty()) {
-    throw ConfigError("dataset.reference is required (the reference view's name)");
+  if (dataset.references.empty() && dataset.reference.empty()) {
+    throw ConfigError("dataset.reference is required (the reference view's name, a list or all)");
   }
+  for (size_t i = 0; i < dataset.references.size(); ++i) {
+    const std::string& name = dataset.references[i];
+    if (name.empty()) {
+      throw ConfigError(ViolatedConstraint("dataset.reference", "''", "a view name"));
+    }
+    if (name == "all" && dataset.references.size() > 1) {
+      throw ConfigError(ViolatedConstraint("dataset.reference", "[..., all, ...]",
+                                           "all alone, or a list of view names"));
+    }
+    if (std::find(dataset.references.begin(), dataset.references.begin() + i, name) !=
+        dataset.references.begin() + i) {
+      throw ConfigError(ViolatedConstraint("dataset.reference", name, "each view listed once"));
+    }
+  }
+  if (dataset.IsScene() && dataset.format == "kitti_raw") {
+    throw ConfigError(ViolatedConstraint(
+        "dataset.reference", dataset.references.size() > 1 ? "a list" : "all",
+        "one frame for kitti_raw (the drive's poses are not read, so its frames share no world "
+        "frame to fuse in): run the frames one by one"));
+  }
+  if (dataset.neighbors.size() > 1 &&
+      std::find(dataset.neighbors.begin(), dataset.neighbors.end(), "auto") !=
+          dataset.neighbors.end()) {
+    throw ConfigError(ViolatedConstraint("dataset.neighbors", "[..., auto, ...]",
+                                         "auto alone, or a list of view names"));
+  }
+  dataset.neighbor_selection.Check();
+  fusion.Check();
+  scene_mesh.Check();
   if (labels.min && labels.max && !(*labels.min < *labels.max)) {
     std::ostringstream s;
     s << *labels.min << ", " << *labels.max;
@@ -488,7 +588,22 @@ LoadedConfig::LoadedConfig() : schema_(std::make_unique<config::Schema>()) {
 void LoadedConfig::Load(const std::string& path, const std::vector<std::string>& overrides) {
   if (!path.empty()) schema_->LoadFile(path);
   for (const auto& o : overrides) schema_->ApplyOverride(o);
+  path_ = path;
+  overrides_ = overrides;
+  DatasetOptions& dataset = options_.dataset;
+  dataset.reference = dataset.references.size() == 1 && dataset.references.front() != "all"
+                          ? dataset.references.front()
+                          : std::string();
   options_.Check();
+}
+
+std::unique_ptr<LoadedConfig> LoadedConfig::WithOverrides(
+    const std::vector<std::string>& more) const {
+  std::vector<std::string> all = overrides_;
+  all.insert(all.end(), more.begin(), more.end());
+  auto config = std::make_unique<LoadedConfig>();
+  config->Load(path_, all);
+  return config;
 }
 
 }  // namespace gcpstereo::pipeline

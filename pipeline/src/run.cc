@@ -22,6 +22,8 @@
 #include "gcpstereo/io/preview.h"
 #include "gcpstereo/mesh/meshing.h"
 #include "gcpstereo/pipeline/output_folder.h"
+#include "gcpstereo/pipeline/scene.h"
+#include "scene_internal.h"
 #include "stage_clock.h"
 #include "view_run.h"
 #include "view_stages.h"
@@ -224,6 +226,9 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
   const Dataset& dataset = load.dataset;
   const View& reference = dataset.reference;
   report["dataset"] = load.dataset_report;
+  if (!config.neighbor_selection().is_null()) {
+    report["dataset"]["neighbor_selection"] = config.neighbor_selection();
+  }
   if (stop_after == "load") {
     // The range data named by the configuration is read too, so that it is validated.
     if (json lidar = LidarInputReport(options); !lidar.is_null()) report["lidar"] = lidar;
@@ -287,11 +292,20 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
 
 RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir,
                        const std::string& config_path) {
+  // A whole scene composes this per-view run (scene.cc); neighbours chosen automatically become
+  // the configuration's list before the view runs.
+  if (config.options().dataset.IsScene()) return RunScene(config, output_dir);
+  if (config.options().dataset.AutoNeighbors()) {
+    const std::unique_ptr<LoadedConfig> chosen = ConfigWithChosenNeighbors(config);
+    return RunPipeline(*chosen, output_dir, config_path);
+  }
   OutputFolder out(output_dir);
-  AddLogFile(out.FinalPath("run.log"));
+  const std::string log_path = out.FinalPath("run.log");
+  AddLogFile(log_path);
   struct LogFileGuard {
-    ~LogFileGuard() { RemoveLogFiles(); }
-  } log_file_guard;
+    std::string path;
+    ~LogFileGuard() { RemoveLogFile(path); }
+  } log_file_guard{log_path};
   try {
     return internal::RunViewInFolder(config, out, config_path);
   } catch (const std::exception& e) {

@@ -272,3 +272,40 @@ TEST_F(SchemaTest, MissingFileIsAnIoError) {
 
 }  // namespace
 }  // namespace gcpstereo::config
+
+namespace gcpstereo::config {
+namespace {
+
+// dataset.reference (any scalar or a list) and dataset.neighbors (a list or auto).
+TEST(ListOrScalar, ScalarsListsAndTheirEffectiveYaml) {
+  std::vector<std::string> references{"0005"}, neighbors;
+  Schema schema;
+  schema.AddListOrScalar("dataset.reference", &references, {}, {"reference"});
+  schema.AddListOrScalar("dataset.neighbors", &neighbors, {"auto"}, {"neighbours"});
+  schema.LoadString("dataset:\n  reference: 0007\n  neighbors: auto\n", "test.yaml");
+  EXPECT_EQ(references, std::vector<std::string>{"0007"});
+  EXPECT_EQ(neighbors, std::vector<std::string>{"auto"});
+  EXPECT_NE(schema.ToYaml().find("reference: 0007"), std::string::npos) << schema.ToYaml();
+  EXPECT_NE(schema.ToYaml().find("neighbors: auto"), std::string::npos) << schema.ToYaml();
+  schema.ApplyOverride("dataset.reference=[0003, 0004]");
+  schema.ApplyOverride("dataset.neighbors=[im1]");
+  EXPECT_EQ(references, (std::vector<std::string>{"0003", "0004"}));
+  EXPECT_EQ(neighbors, std::vector<std::string>{"im1"});
+  // A one-element list that is not one of the scalar words stays a list.
+  EXPECT_NE(schema.ToYaml().find("neighbors: [im1]"), std::string::npos) << schema.ToYaml();
+  EXPECT_NE(schema.ToYaml().find("reference: [0003, 0004]"), std::string::npos)
+      << schema.ToYaml();
+  try {
+    schema.ApplyOverride("dataset.neighbors=im2");
+    FAIL() << "a scalar other than auto was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "dataset.neighbors = im2. Violated constraint: a list or auto"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(neighbors, std::vector<std::string>{"im1"});  // unchanged by the failed override
+}
+
+}  // namespace
+}  // namespace gcpstereo::config

@@ -131,5 +131,48 @@ TEST(MeshAccuracy, EmptyAndDegenerateInputs) {
   }
 }
 
+// Points on a grid of the plane z = offset, `n` per side over [0, 1]².
+std::vector<Eigen::Vector3f> GridPoints(int n, float offset) {
+  std::vector<Eigen::Vector3f> points;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) points.push_back({(i + 0.5f) / n, (j + 0.5f) / n, offset});
+  }
+  return points;
+}
+
+TEST(SurfaceAccuracy, PointsAgainstAMeshAndAMeshAgainstPoints) {
+  MeshAccuracyOptions options;
+  options.thresholds = {0.01, 0.05};
+  const TriangleMesh gt = Grid(4, 0.0f, 1.0f, 2.0f);
+  // Points 3 cm off the plane: all within 5 cm, none within 1 cm, and the dense GT samples are all
+  // within 5 cm of some point (spacing 1 cm, offset 3 cm: at most √(0.5² + 0.5² + 3²) cm).
+  const std::vector<Eigen::Vector3f> points = GridPoints(100, 2.03f);
+  const MeshAccuracy m = EvaluateSurface({nullptr, &points}, {&gt, nullptr}, options);
+  EXPECT_EQ(m.estimate_samples, 10000);
+  EXPECT_DOUBLE_EQ(m.accuracy_percent[0], 0.0);
+  EXPECT_DOUBLE_EQ(m.accuracy_percent[1], 100.0);
+  EXPECT_DOUBLE_EQ(m.completeness_percent[1], 100.0);
+  EXPECT_NEAR(m.accuracy_median, 0.03, 1e-5);
+  // Half the square covered: half complete.
+  std::vector<Eigen::Vector3f> half;
+  for (const auto& p : GridPoints(100, 2.0f)) {
+    if (p.x() < 0.5f) half.push_back(p);
+  }
+  const MeshAccuracy h = EvaluateSurface({nullptr, &half}, {&gt, nullptr}, options);
+  EXPECT_DOUBLE_EQ(h.accuracy_percent[0], 100.0);
+  EXPECT_NEAR(h.completeness_percent[1], 54.5, 1.5);  // x <= 0.495 + 0.05
+  // The other way round: a mesh against laser points.
+  const MeshAccuracy r = EvaluateSurface({&gt, nullptr}, {nullptr, &points}, options);
+  EXPECT_DOUBLE_EQ(r.accuracy_percent[1], 100.0);
+  EXPECT_DOUBLE_EQ(r.completeness_percent[0], 0.0);
+  EXPECT_DOUBLE_EQ(r.completeness_percent[1], 100.0);
+  // More points than max_samples: every k-th.
+  options.max_samples = 1000;
+  EXPECT_EQ(EvaluateSurface({nullptr, &points}, {&gt, nullptr}, options).estimate_samples, 1000);
+  const std::vector<Eigen::Vector3f> none;
+  EXPECT_THROW(EvaluateSurface({&gt, nullptr}, {nullptr, &none}, options), Error);
+  EXPECT_THROW(EvaluateSurface({&gt, &points}, {&gt, nullptr}, options), Error);
+}
+
 }  // namespace
 }  // namespace gcpstereo::eval

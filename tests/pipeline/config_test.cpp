@@ -96,7 +96,7 @@ TEST(PipelineConfig, EffectiveConfigReloadsToTheSameValues) {
   config::Schema& s = const_cast<config::Schema&>(again.schema());
   s.LoadString(config.schema().ToYaml(), "effective_config.yaml");
   EXPECT_EQ(again.options().tiling.tiles, (std::vector<int>{3, 1}));
-  EXPECT_EQ(again.options().dataset.reference, "0000000010");
+  EXPECT_EQ(again.options().dataset.references, std::vector<std::string>{"0000000010"});
   EXPECT_EQ(again.options().gcp.lidar_path, config.options().gcp.lidar_path);
 }
 

@@ -100,7 +100,16 @@ struct Schema::Entry {
   Range range;
   std::vector<std::string> choices;
   std::size_t fixed_size = 0;
+  // List-or-scalar string lists (AddListOrScalar): a scalar is accepted as a one-element list.
+  bool scalar_allowed = false;
+  std::vector<std::string> scalar_words;  // empty: any scalar
   KeyDoc doc;
+
+  bool WritesAsScalar(const std::vector<std::string>& list) const {
+    return scalar_allowed && list.size() == 1 &&
+           (scalar_words.empty() || std::find(scalar_words.begin(), scalar_words.end(),
+                                              list.front()) != scalar_words.end());
+  }
   std::string default_text;
   bool set = false;
 
@@ -115,6 +124,10 @@ struct Schema::Entry {
       case 3:
         return choices.empty() ? "string" : "one of {" + Join(choices, ", ") + "}";
       case 4:
+        if (scalar_allowed) {
+          return scalar_words.empty() ? "string or list of strings"
+                                      : "list of strings or " + Join(scalar_words, ", ");
+        }
         return "list of " +
                (choices.empty() ? std::string("strings") : "{" + Join(choices, ", ") + "}");
       case 5:
@@ -137,8 +150,15 @@ struct Schema::Entry {
             n = *p ? ShortestNumberNode(**p) : YAML::Node("auto");
           } else if constexpr (std::is_same_v<T, std::optional<int>>) {
             n = *p ? YAML::Node(**p) : YAML::Node("auto");
-          } else if constexpr (std::is_same_v<T, std::vector<int>> ||
-                               std::is_same_v<T, std::vector<std::string>>) {
+          } else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+            if (WritesAsScalar(*p)) {
+              n = p->front();
+            } else {
+              n = YAML::Node(YAML::NodeType::Sequence);
+              for (const auto& v : *p) n.push_back(v);
+              n.SetStyle(YAML::EmitterStyle::Flow);
+            }
+          } else if constexpr (std::is_same_v<T, std::vector<int>>) {
             n = YAML::Node(YAML::NodeType::Sequence);
             for (const auto& v : *p) n.push_back(v);
             n.SetStyle(YAML::EmitterStyle::Flow);
@@ -187,6 +207,10 @@ void Schema::Add(const std::string& key, std::string* field, std::vector<std::st
 void Schema::Add(const std::string& key, std::vector<std::string>* field,
                  std::vector<std::string> choices, KeyDoc doc) {
   GCPSTEREO_ADD_ENTRY(e->choices = std::move(choices))
+}
+void Schema::AddListOrScalar(const std::string& key, std::vector<std::string>* field,
+                             std::vector<std::string> scalars, KeyDoc doc) {
+  GCPSTEREO_ADD_ENTRY(e->scalar_allowed = true; e->scalar_words = std::move(scalars))
 }
 void Schema::Add(const std::string& key, std::vector<int>* field, std::size_t fixed_size,
                  Range range, KeyDoc doc) {
@@ -264,6 +288,16 @@ class ValueApplier {
     std::vector<std::string> out;
     if (node_.IsNull()) {
       *p = out;
+      return;
+    }
+    if (node_.IsScalar() && entry_.scalar_allowed) {
+      const std::string& word = node_.Scalar();
+      if (!entry_.scalar_words.empty() &&
+          std::find(entry_.scalar_words.begin(), entry_.scalar_words.end(), word) ==
+              entry_.scalar_words.end()) {
+        Fail("a list or " + Join(entry_.scalar_words, ", "));
+      }
+      *p = {word};
       return;
     }
     if (!node_.IsSequence()) Fail("a list");

@@ -79,6 +79,19 @@ void RemoveLogFiles() {
   }
 }
 
+void RemoveLogFile(const std::string& path) {
+  auto& sinks = spdlog::default_logger()->sinks();
+  for (auto it = sinks.begin(); it != sinks.end();) {
+    const auto file = std::dynamic_pointer_cast<spdlog::sinks::basic_file_sink_mt>(*it);
+    if (file && file->filename() == path) {
+      file->flush();
+      it = sinks.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
 void LogToFilesOnly(const std::string& line) {
   const spdlog::details::log_msg message(spdlog::default_logger()->name(), spdlog::level::err,
                                          line);

@@ -55,8 +55,24 @@ struct Samples {
   double area = 0.0;
 };
 
+// One uniform sample of the surface: the triangle (by area) and the point in it.
+std::pair<size_t, Eigen::Vector3d> DrawSample(const std::vector<Triangle>& triangles,
+                                              const std::vector<double>& cdf, double area,
+                                              std::mt19937_64* rng) {
+  const double u = Uniform01(rng) * area;
+  const size_t i = std::min<size_t>(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin(),
+                                    triangles.size() - 1);
+  const double r1 = std::sqrt(Uniform01(rng)), r2 = Uniform01(rng);
+  const Triangle& t = triangles[i];
+  return {i, (1.0 - r1) * t.a + r1 * (1.0 - r2) * t.b + r1 * r2 * t.c};
+}
+
+// Samples at `spacing` over the surface, or over the part `filter` accepts (its area estimated by
+// a pilot draw; `kept_fraction` receives the estimate).
 Samples SampleSurface(const std::vector<Triangle>& triangles, double spacing,
-                      std::int64_t max_samples, std::uint64_t seed) {
+                      std::int64_t max_samples, std::uint64_t seed,
+                      const std::function<bool(const Eigen::Vector3d&)>& filter = {},
+                      double* kept_fraction = nullptr) {
   Samples s;
   std::vector<double> cdf(triangles.size());
   for (size_t i = 0; i < triangles.size(); ++i) {
@@ -64,21 +80,36 @@ Samples SampleSurface(const std::vector<Triangle>& triangles, double spacing,
     cdf[i] = s.area;
   }
   if (triangles.empty()) return s;
-  const double wanted = std::ceil(s.area / (spacing * spacing));
+  std::mt19937_64 rng(seed);
+  double fraction = 1.0;
+  if (filter) {
+    std::mt19937_64 pilot(seed ^ 0x9e3779b97f4a7c15ULL);
+    std::int64_t accepted = 0;
+    for (std::int64_t k = 0; k < MeshAccuracyOptions::kPilotSamples; ++k) {
+      accepted += filter(DrawSample(triangles, cdf, s.area, &pilot).second) ? 1 : 0;
+    }
+    fraction = static_cast<double>(accepted) / MeshAccuracyOptions::kPilotSamples;
+    if (kept_fraction != nullptr) *kept_fraction = fraction;
+    if (accepted == 0) {
+      s.area = 0.0;
+      return s;
+    }
+  }
+  const double wanted = std::ceil(fraction * s.area / (spacing * spacing));
   const std::int64_t count =
       std::max<std::int64_t>(1, std::min<double>(wanted, static_cast<double>(max_samples)));
-  std::mt19937_64 rng(seed);
+  // With a filter, at most 4× the draws its pilot fraction predicts (then fewer samples).
+  const double max_draws = filter ? 4.0 * count / fraction + 1000.0 : static_cast<double>(count);
   s.points.reserve(count);
   s.triangle.reserve(count);
-  for (std::int64_t k = 0; k < count; ++k) {
-    const double u = Uniform01(&rng) * s.area;
-    const size_t i = std::min<size_t>(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin(),
-                                      triangles.size() - 1);
-    const double r1 = std::sqrt(Uniform01(&rng)), r2 = Uniform01(&rng);
-    const Triangle& t = triangles[i];
-    s.points.push_back((1.0 - r1) * t.a + r1 * (1.0 - r2) * t.b + r1 * r2 * t.c);
+  for (double draws = 0; static_cast<std::int64_t>(s.points.size()) < count && draws < max_draws;
+       ++draws) {
+    const auto [i, point] = DrawSample(triangles, cdf, s.area, &rng);
+    if (filter && !filter(point)) continue;
+    s.points.push_back(point);
     s.triangle.push_back(static_cast<int>(i));
   }
+  s.area *= fraction;
   return s;
 }
 
@@ -227,51 +258,151 @@ nlohmann::json MeshAccuracy::ToJson() const {
   j["estimate_spacing"] = internal::JsonNumber(estimate_spacing);
   j["gt_spacing"] = internal::JsonNumber(gt_spacing);
   j["degenerate_faces"] = degenerate_faces;
+  j["gt_kept_fraction"] = gt_kept_fraction;
   return j;
 }
+
+namespace {
+
+// Distance from each query to the nearest of `targets` (exact KD-tree search, coordinates
+// centred on `origin` for float precision).
+std::vector<double> DistancesToPoints(const Samples& queries, const Samples& targets,
+                                      const Eigen::Vector3d& origin) {
+  std::vector<double> distances(queries.points.size(), std::numeric_limits<double>::infinity());
+  if (queries.points.empty() || targets.points.empty()) return distances;
+  cv::Mat features(static_cast<int>(targets.points.size()), 3, CV_32F);
+  for (int i = 0; i < features.rows; ++i) {
+    const Eigen::Vector3d p = targets.points[i] - origin;
+    for (int k = 0; k < 3; ++k) features.at<float>(i, k) = static_cast<float>(p[k]);
+  }
+  cv::flann::GenericIndex<cvflann::L2_Simple<float>> index(features,
+                                                           cvflann::KDTreeSingleIndexParams(10));
+  constexpr int kBatch = 65536;
+  const int total = static_cast<int>(queries.points.size());
+  for (int start = 0; start < total; start += kBatch) {
+    const int count = std::min(kBatch, total - start);
+    cv::Mat query(count, 3, CV_32F);
+    for (int i = 0; i < count; ++i) {
+      const Eigen::Vector3d p = queries.points[start + i] - origin;
+      for (int k = 0; k < 3; ++k) query.at<float>(i, k) = static_cast<float>(p[k]);
+    }
+    cv::Mat indices(count, 1, CV_32S), squared(count, 1, CV_32F);
+    index.knnSearch(query, indices, squared, 1, cvflann::SearchParams(-1, 0.0f, true));
+    for (int i = 0; i < count; ++i) {
+      const int j = indices.at<int>(i, 0);
+      if (j < 0 || j >= static_cast<int>(targets.points.size())) continue;
+      distances[start + i] = (targets.points[j] - queries.points[start + i]).norm();
+    }
+  }
+  return distances;
+}
+
+// A point set as its own samples: every point, or every k-th when there are more than max.
+Samples PointSamples(const std::vector<Eigen::Vector3f>& points, std::int64_t max_samples) {
+  Samples s;
+  const std::int64_t n = static_cast<std::int64_t>(points.size());
+  const std::int64_t step = std::max<std::int64_t>(1, (n + max_samples - 1) / max_samples);
+  s.points.reserve(static_cast<size_t>(n / step + 1));
+  for (std::int64_t i = 0; i < n; i += step) s.points.push_back(points[i].cast<double>());
+  return s;
+}
+
+// One side prepared for the comparison: its samples and, for a mesh, its triangles.
+struct PreparedSide {
+  Samples samples;
+  std::vector<Triangle> triangles;
+  size_t num_vertices = 0;
+  bool is_mesh = false;
+};
+
+PreparedSide Prepare(const Surface& side, const char* which, double spacing,
+                     std::int64_t max_samples, std::uint64_t seed, std::int64_t* degenerate,
+                     const std::function<bool(const Eigen::Vector3d&)>& filter = {},
+                     double* kept_fraction = nullptr) {
+  if ((side.mesh == nullptr) == (side.points == nullptr)) {
+    throw Error(std::string("EvaluateSurface: the ") + which +
+                " must be exactly one of a mesh and a point set");
+  }
+  PreparedSide prepared;
+  if (side.mesh != nullptr) {
+    prepared.is_mesh = true;
+    prepared.triangles = ValidTriangles(*side.mesh, degenerate);
+    prepared.num_vertices = side.mesh->vertices.size();
+    prepared.samples =
+        SampleSurface(prepared.triangles, spacing, max_samples, seed, filter, kept_fraction);
+  } else if (filter) {
+    std::vector<Eigen::Vector3f> kept;
+    for (const Eigen::Vector3f& p : *side.points) {
+      if (filter(p.cast<double>())) kept.push_back(p);
+    }
+    if (kept_fraction != nullptr && !side.points->empty()) {
+      *kept_fraction = static_cast<double>(kept.size()) / side.points->size();
+    }
+    prepared.samples = PointSamples(kept, max_samples);
+  } else {
+    prepared.samples = PointSamples(*side.points, max_samples);
+  }
+  return prepared;
+}
+
+std::vector<double> DistancesTo(const Samples& queries, const PreparedSide& target,
+                                const Eigen::Vector3d& origin, int neighbors) {
+  return target.is_mesh ? DistancesToSurface(queries, target.samples, target.triangles,
+                                             target.num_vertices, origin, neighbors)
+                        : DistancesToPoints(queries, target.samples, origin);
+}
+
+}  // namespace
 
 // ETH3D (Schöps et al., CVPR 2017, §4) and DTU (Aanæs et al., IJCV 2016) style surface evaluation:
 // accuracy(t) = |{p ∈ S_est : d(p, M_gt) < t}| / |S_est|,
 // completeness(t) = |{q ∈ S_gt : d(q, M_est) < t}| / |S_gt|, F = 2 a c / (a + c).
-// Deviations: both surfaces are meshes sampled here (ETH3D samples only the estimate and uses the
-// laser points as GT; DTU compares point clouds); a distance equal to t counts as within (<= t).
-MeshAccuracy EvaluateMesh(const TriangleMesh& estimate, const TriangleMesh& gt,
-                          const MeshAccuracyOptions& options) {
+// Deviations: a mesh side is sampled here (ETH3D samples only the estimate and uses the laser
+// points as GT; DTU compares point clouds: both are possible with EvaluateSurface); a distance
+// equal to t counts as within (<= t).
+MeshAccuracy EvaluateSurface(const Surface& estimate, const Surface& gt,
+                             const MeshAccuracyOptions& options) {
   options.Check();
   MeshAccuracy result;
   result.thresholds = options.thresholds;
-  const std::vector<Triangle> gt_triangles = ValidTriangles(gt, &result.degenerate_faces);
-  const std::vector<Triangle> est_triangles = ValidTriangles(estimate, &result.degenerate_faces);
-  if (gt_triangles.empty()) {
-    throw Error("EvaluateMesh: the ground-truth mesh has no face of positive area (" +
-                std::to_string(gt.faces.size()) + " faces, " + std::to_string(gt.vertices.size()) +
-                " vertices)");
-  }
   const double spacing =
       options.sample_spacing > 0.0
           ? options.sample_spacing
           : 0.25 * *std::min_element(options.thresholds.begin(), options.thresholds.end());
   // Distinct seeds so that identical meshes do not get identical sample sets.
-  const Samples gt_samples =
-      SampleSurface(gt_triangles, spacing, options.max_samples, options.seed * 2 + 0);
-  const Samples est_samples =
-      SampleSurface(est_triangles, spacing, options.max_samples, options.seed * 2 + 1);
+  const PreparedSide gt_side =
+      Prepare(gt, "ground truth", spacing, options.max_samples, options.seed * 2 + 0,
+              &result.degenerate_faces, options.gt_filter, &result.gt_kept_fraction);
+  if (gt_side.is_mesh && gt_side.triangles.empty()) {
+    throw Error("EvaluateMesh: the ground-truth mesh has no face of positive area (" +
+                std::to_string(gt.mesh->faces.size()) + " faces, " +
+                std::to_string(gt.mesh->vertices.size()) + " vertices)");
+  }
+  if (gt_side.samples.points.empty()) {
+    throw Error(options.gt_filter ? "EvaluateSurface: no part of the ground truth is observed"
+                                  : "EvaluateSurface: the ground-truth point set is empty");
+  }
+  const PreparedSide est_side =
+      Prepare(estimate, "estimate", spacing, options.max_samples, options.seed * 2 + 1,
+              &result.degenerate_faces);
+  const Samples& gt_samples = gt_side.samples;
+  const Samples& est_samples = est_side.samples;
   result.gt_area = gt_samples.area;
   result.estimate_area = est_samples.area;
   result.gt_samples = static_cast<std::int64_t>(gt_samples.points.size());
   result.estimate_samples = static_cast<std::int64_t>(est_samples.points.size());
-  result.gt_spacing = std::sqrt(gt_samples.area / gt_samples.points.size());
-  result.estimate_spacing =
-      est_samples.points.empty() ? 0.0 : std::sqrt(est_samples.area / est_samples.points.size());
+  result.gt_spacing =
+      gt_side.is_mesh ? std::sqrt(gt_samples.area / gt_samples.points.size()) : 0.0;
+  result.estimate_spacing = est_samples.points.empty() || !est_side.is_mesh
+                                ? 0.0
+                                : std::sqrt(est_samples.area / est_samples.points.size());
 
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   for (const Eigen::Vector3d& p : gt_samples.points) origin += p;
   origin /= static_cast<double>(gt_samples.points.size());
 
-  std::vector<double> accuracy = DistancesToSurface(est_samples, gt_samples, gt_triangles,
-                                                    gt.vertices.size(), origin, options.neighbors);
-  std::vector<double> completeness = DistancesToSurface(
-      gt_samples, est_samples, est_triangles, estimate.vertices.size(), origin, options.neighbors);
+  std::vector<double> accuracy = DistancesTo(est_samples, gt_side, origin, options.neighbors);
+  std::vector<double> completeness = DistancesTo(gt_samples, est_side, origin, options.neighbors);
   for (double t : options.thresholds) {
     const auto within = [t](const std::vector<double>& d) {
       return static_cast<std::int64_t>(
@@ -294,6 +425,11 @@ MeshAccuracy EvaluateMesh(const TriangleMesh& estimate, const TriangleMesh& gt,
     result.completeness_mean = result.completeness_median = std::numeric_limits<double>::infinity();
   }
   return result;
+}
+
+MeshAccuracy EvaluateMesh(const TriangleMesh& estimate, const TriangleMesh& gt,
+                          const MeshAccuracyOptions& options) {
+  return EvaluateSurface(Surface{&estimate, nullptr}, Surface{&gt, nullptr}, options);
 }
 
 }  // namespace gcpstereo::eval

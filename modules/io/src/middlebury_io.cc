@@ -199,6 +199,7 @@ Dataset LoadMiddleburyDataset(const DatasetRequest& request) {
   for (const auto& v : layout.views) names.push_back(v.name);
   std::vector<std::string> neighbor_names;
   internal::ResolveViewNames(request, names, &neighbor_names);
+  if (!request.load_neighbors) neighbor_names.clear();
   auto find_view = [&layout](const std::string& name) {
     return *std::find_if(layout.views.begin(), layout.views.end(),
                          [&name](const MiddleburyView& v) { return v.name == name; });

@@ -108,6 +108,7 @@ Dataset LoadStrechaDataset(const DatasetRequest& request) {
   for (const auto& [name, file] : files) names.push_back(name);
   std::vector<std::string> neighbor_names;
   internal::ResolveViewNames(request, names, &neighbor_names);
+  if (!request.load_neighbors) neighbor_names.clear();
 
   Dataset dataset;
   dataset.format = "strecha";

@@ -6,15 +6,20 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "gcpstereo/config/schema.h"
 #include "gcpstereo/cost/birchfield_tomasi.h"
 #include "gcpstereo/cost/label_range.h"
 #include "gcpstereo/cost/plane_sweep.h"
+#include "gcpstereo/cost/view_selection.h"
+#include "gcpstereo/fusion/fusion.h"
 #include "gcpstereo/gcp/gcp_sources.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
 #include "gcpstereo/gcp/sweep_motion.h"
 #include "gcpstereo/mesh/meshing.h"
 #include "gcpstereo/mesh/render.h"
+#include "gcpstereo/mesh/surface_reconstruction.h"
 #include "gcpstereo/optimize/alpha_expansion.h"
 #include "gcpstereo/optimize/energy.h"
 #include "gcpstereo/optimize/plane_fit.h"
@@ -27,9 +32,33 @@ namespace gcpstereo::pipeline {
 struct DatasetOptions {
   std::string format = "strecha";      // strecha | middlebury | kitti_raw
   std::string path;                    // the data set's folder (required)
-  std::string reference;               // reference view name (required)
-  std::vector<std::string> neighbors;  // views used for matching; empty = all others
+  // dataset.reference: one view name, a list of names or `all` (a whole scene: every reference's
+  // depth map into OUT/views/<name>/, fused into OUT/). `reference` is the single reference's name
+  // (LoadedConfig::Load sets it; empty for a scene).
+  std::vector<std::string> references;
+  std::string reference;
+  // Views used for matching; empty = all others; {"auto"} = chosen per reference from the cameras
+  // (and the scan's points) by cost::SelectNeighbors, `neighbor_count` of them.
+  std::vector<std::string> neighbors;
+  cost::ViewSelectionOptions neighbor_selection;  // dataset.neighbor_count, dataset.neighbor_selection.*
   double scale = 1.0;                  // image scale before processing, (0, 1]
+
+  bool AutoNeighbors() const { return neighbors.size() == 1 && neighbors.front() == "auto"; }
+  // More than one reference, or `all`.
+  bool IsScene() const {
+    return references.size() > 1 || (references.size() == 1 && references.front() == "all");
+  }
+};
+
+// Keys of the `eval.scene.` section: the ground truth of a whole scene's model.
+struct SceneEvalOptions {
+  // A mesh (PLY) and/or a point cloud (PLY/PCD: a laser scan) of the true surface in world
+  // coordinates; empty = <dataset.path>/gt/mesh.ply and gt/laser.ply when they exist (the
+  // synthetic sets).
+  std::string gt_mesh;
+  std::string gt_points;
+  bool view_histograms = true;  // the σ-histogram of the scene mesh in every view with GT depth
+  int max_samples = 1'000'000;  // eval.scene.max_samples: samples per surface compared
 };
 
 // Keys of the `labels:` section.
@@ -127,6 +156,7 @@ struct EvalOptions {
   // half scores the result (KITTI-style bad-3), as no dense ground truth exists.
   bool lidar_holdout = false;
   int holdout_block_px = 8;
+  SceneEvalOptions scene;  // eval.scene.*
 };
 
 struct OutputOptions {
@@ -157,6 +187,12 @@ struct PipelineConfig {
   EvalOptions eval;
   RuntimeOptions runtime;
   OutputOptions output;
+  fusion::FusionOptions fusion;    // fusion.*: the scene's depth-map fusion
+  bool fusion_include_gcps = false;  // fusion.include_gcps: the views' GCPs join the fused cloud
+  // fusion.input: the views' depth.pfm (depth), or their propagated_depth.pfm (propagated: D̂
+  // alone, e.g. views run with runtime.stop_after: propagation).
+  std::string fusion_input = "depth";
+  mesh::SurfaceOptions scene_mesh;  // scene_mesh.*: the scene's surface reconstruction
 
   // Registers every key with `schema` (bound to this object's fields, which must outlive it).
   void Register(config::Schema* schema);
@@ -168,15 +204,31 @@ struct PipelineConfig {
 class LoadedConfig {
  public:
   LoadedConfig();
+  // The schema points into options_: neither copied nor moved.
+  LoadedConfig(const LoadedConfig&) = delete;
+  LoadedConfig& operator=(const LoadedConfig&) = delete;
   // Applies the file (if not empty) and then each KEY=VALUE override, then Check()s.
   void Load(const std::string& path, const std::vector<std::string>& overrides);
   const PipelineConfig& options() const { return options_; }
   PipelineConfig& mutable_options() { return options_; }
   const config::Schema& schema() const { return *schema_; }
+  // The same file and overrides, then `more` overrides: a view's configuration in a scene.
+  std::unique_ptr<LoadedConfig> WithOverrides(const std::vector<std::string>& more) const;
+  const std::string& path() const { return path_; }
+  const std::vector<std::string>& overrides() const { return overrides_; }
+  // dataset.neighbors: auto: how the neighbours were chosen (cost::ViewSelection::ToJson), for
+  // the view's report.json (dataset.neighbor_selection); null otherwise.
+  const nlohmann::json& neighbor_selection() const { return neighbor_selection_; }
+  void set_neighbor_selection(nlohmann::json selection) {
+    neighbor_selection_ = std::move(selection);
+  }
 
  private:
   PipelineConfig options_;
   std::unique_ptr<config::Schema> schema_;
+  std::string path_;
+  std::vector<std::string> overrides_;
+  nlohmann::json neighbor_selection_;
 };
 
 }  // namespace gcpstereo::pipeline

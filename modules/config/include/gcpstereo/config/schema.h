@@ -70,6 +70,11 @@ class Schema {
   // A list of strings, each one of `choices` (or any when empty).
   void Add(const std::string& key, std::vector<std::string>* field,
            std::vector<std::string> choices, KeyDoc doc);
+  // A list of strings that may also be written as one scalar: any scalar when `scalars` is empty
+  // (`dataset.reference: 0005` = [0005]), else only one of `scalars` (`dataset.neighbors: auto`).
+  // The effective configuration writes a one-element list of that kind back as the scalar.
+  void AddListOrScalar(const std::string& key, std::vector<std::string>* field,
+                       std::vector<std::string> scalars, KeyDoc doc);
   // A list of integers; `fixed_size` > 0 requires exactly that many elements.
   void Add(const std::string& key, std::vector<int>* field, std::size_t fixed_size, Range range,
            KeyDoc doc);

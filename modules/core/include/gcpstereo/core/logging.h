@@ -20,6 +20,8 @@ void SetLogLevel(const std::string& level);
 void AddLogFile(const std::string& path);
 // Removes file sinks added by AddLogFile (closing their files).
 void RemoveLogFiles();
+// Removes the file sink of `path` only (a scene's run.log stays while a view's closes).
+void RemoveLogFile(const std::string& path);
 // Writes `line` at error level to the log files only (whatever the log level): for an error the
 // caller reports on stderr itself.
 void LogToFilesOnly(const std::string& line);

@@ -2,8 +2,10 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
+#include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
 
 #include "gcpstereo/core/types.h"
@@ -35,6 +37,13 @@ struct MeshAccuracyOptions {
   int neighbors = 4;
   // RNG seed for the sampling. YAML: eval.mesh.seed.
   std::uint64_t seed = 0;
+  // The part of the ground truth that counts (EvaluateSurface; no YAML key): a GT sample or point
+  // it rejects is in no denominator — the surface no camera observed, which no estimate can
+  // complete (the DTU and ETH3D evaluations mask it too). Empty = all. A mesh is then sampled
+  // until the accepted samples reach the spacing over the accepted area (estimated by a pilot
+  // draw of kPilotSamples), or max_samples.
+  std::function<bool(const Eigen::Vector3d&)> gt_filter;
+  static constexpr std::int64_t kPilotSamples = 20000;
 
   void Check() const;
 };
@@ -55,6 +64,7 @@ struct MeshAccuracy {
   double estimate_spacing = 0.0;  // sqrt(area / samples) actually reached
   double gt_spacing = 0.0;
   std::int64_t degenerate_faces = 0;  // zero-area faces or bad indices (ignored), both meshes
+  double gt_kept_fraction = 1.0;  // share of the GT (area or points) the gt_filter accepted
   nlohmann::json ToJson() const;
 };
 
@@ -62,5 +72,20 @@ struct MeshAccuracy {
 // estimate without area gives accuracy 0 and completeness 0 (reported, not thrown).
 MeshAccuracy EvaluateMesh(const TriangleMesh& estimate, const TriangleMesh& gt,
                           const MeshAccuracyOptions& options = {});
+
+// One side of the comparison: a mesh (sampled as above) or a point set (a fused cloud, a laser
+// scan), which is its own sample set — every point, or every k-th in input order when there are
+// more than max_samples — and whose distance to a query is that of its nearest point. Exactly one
+// of the two pointers is set.
+struct Surface {
+  const TriangleMesh* mesh = nullptr;
+  const std::vector<Eigen::Vector3f>* points = nullptr;
+};
+
+// The measures above with either side a mesh or points (EvaluateMesh = both meshes; areas and
+// spacings are 0 for a point side). Throws Error when a side sets neither or both pointers, a GT
+// mesh has no face of positive area or GT points are empty.
+MeshAccuracy EvaluateSurface(const Surface& estimate, const Surface& gt,
+                             const MeshAccuracyOptions& options = {});
 
 }  // namespace gcpstereo::eval

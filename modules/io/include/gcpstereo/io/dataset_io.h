@@ -16,6 +16,9 @@ struct DatasetRequest {
   std::string reference;               // reference view name ("0005", "im2", "0000000010")
   std::vector<std::string> neighbors;  // neighbour names; empty = all other views (kitti: ignored)
   double scale = 1.0;                  // image scale factor, valid range (0, 4]; paper: 0.5
+  // false: the reference view (and its ground truth) only, `neighbors` ignored (strecha and
+  // middlebury; kitti_raw always loads its pair): what a scene's fusion needs of each view.
+  bool load_neighbors = true;
 };
 
 // Loads a data set; throws IoError / Error naming the file and the problem for anything missing or
