@@ -65,8 +65,7 @@ void PipelineConfig::Register(config::Schema* s) {
           "deg", "θ_max"});
   s->Add("dataset.neighbor_selection.grid_step_px", &dataset.neighbor_selection.grid_step_px,
          Range::Between(1, 1024),
-         {"dataset.neighbors: auto without scan points: reference pixels sampled every n",
-          "px"});
+         {"dataset.neighbors: auto without scan points: reference pixels sampled every n", "px"});
   s->Add("dataset.scale", &dataset.scale, Range{0.0, 1.0, false, true},
          {"image scale before processing (fountain-P11 in the paper: 0.5)"});
 
@@ -533,9 +532,8 @@ void PipelineConfig::Check() const {
         "one frame for kitti_raw (the drive's poses are not read, so its frames share no world "
         "frame to fuse in): run the frames one by one"));
   }
-  if (dataset.neighbors.size() > 1 &&
-      std::find(dataset.neighbors.begin(), dataset.neighbors.end(), "auto") !=
-          dataset.neighbors.end()) {
+  if (dataset.neighbors.size() > 1 && std::find(dataset.neighbors.begin(), dataset.neighbors.end(),
+                                                "auto") != dataset.neighbors.end()) {
     throw ConfigError(ViolatedConstraint("dataset.neighbors", "[..., auto, ...]",
                                          "auto alone, or a list of view names"));
   }

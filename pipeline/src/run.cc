@@ -300,12 +300,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     return RunPipeline(*chosen, output_dir, config_path);
   }
   OutputFolder out(output_dir);
-  const std::string log_path = out.FinalPath("run.log");
-  AddLogFile(log_path);
-  struct LogFileGuard {
-    std::string path;
-    ~LogFileGuard() { RemoveLogFile(path); }
-  } log_file_guard{log_path};
+  const ScopedLogFile log_file(out.FinalPath("run.log"));
   try {
     return internal::RunViewInFolder(config, out, config_path);
   } catch (const std::exception& e) {

@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <optional>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -42,7 +42,6 @@ namespace {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
-
 
 // A YAML double-quoted scalar: view names such as 0005 stay strings whatever the YAML parser.
 std::string Quoted(const std::string& text) {
@@ -138,8 +137,8 @@ NeighborChoice ChooseNeighbors(const SceneCameras& scene, const std::string& ref
 }
 
 // The per-view configuration: the scene's with this reference and its neighbours.
-std::unique_ptr<LoadedConfig> ViewConfig(const LoadedConfig& scene_config,
-                                         const std::string& name, const SceneCameras* cameras,
+std::unique_ptr<LoadedConfig> ViewConfig(const LoadedConfig& scene_config, const std::string& name,
+                                         const SceneCameras* cameras,
                                          const std::vector<Eigen::Vector3d>& points) {
   const PipelineConfig& o = scene_config.options();
   std::vector<std::string> overrides = {"dataset.reference=" + Quoted(name)};
@@ -172,7 +171,8 @@ bool ViewFolderComplete(const fs::path& dir, const std::string& effective_yaml) 
   return ReadText(dir / "effective_config.yaml") == effective_yaml;
 }
 
-// ---- Fusion, meshing, evaluation -----------------------------------------------------------------
+// ---- Fusion, meshing, evaluation
+// -----------------------------------------------------------------
 
 // A finished view folder, loaded: its view (image, camera and ground truth at the run's scale)
 // and its depth map.
@@ -183,6 +183,17 @@ struct FinishedView {
   GroundTruth ground_truth;
   cv::Mat depth;
 };
+
+// Throws IoError naming the first of `files` missing from `dir`.
+void CheckViewFolder(const std::string& dir, const std::vector<std::string>& files) {
+  for (const std::string& file : files) {
+    std::error_code ec;
+    if (!fs::is_regular_file(fs::path(dir) / file, ec)) {
+      throw IoError((fs::path(dir) / file).string(),
+                    "not found: the folder is not a finished per-view run of gcpstereo");
+    }
+  }
+}
 
 struct SceneIdentity {
   std::string format, path;
@@ -195,14 +206,7 @@ std::vector<FinishedView> LoadFinishedViews(const std::vector<std::string>& dirs
   if (dirs.empty()) throw Error("fuse: no view folder given");
   std::vector<FinishedView> views;
   for (const std::string& dir : dirs) {
-    for (const std::string& file : {std::string("effective_config.yaml"), depth_file,
-                                    std::string("report.json")}) {
-      std::error_code ec;
-      if (!fs::is_regular_file(fs::path(dir) / file, ec)) {
-        throw IoError((fs::path(dir) / file).string(),
-                      "not found: the folder is not a finished per-view run of gcpstereo");
-      }
-    }
+    CheckViewFolder(dir, {"effective_config.yaml", depth_file, "report.json"});
     LoadedConfig config;
     config.Load((fs::path(dir) / "effective_config.yaml").string(), {});
     const DatasetOptions& d = config.options().dataset;
@@ -216,8 +220,8 @@ std::vector<FinishedView> LoadFinishedViews(const std::vector<std::string>& dirs
     } else if (d.format != identity->format || canonical != identity->path ||
                d.scale != identity->scale) {
       throw Error("fuse: " + dir + " is a view of " + d.format + " data set " + canonical +
-                  " at scale " + FormatNumber(d.scale) + ", but " + views.front().dir +
-                  " is of " + identity->format + " data set " + identity->path + " at scale " +
+                  " at scale " + FormatNumber(d.scale) + ", but " + views.front().dir + " is of " +
+                  identity->format + " data set " + identity->path + " at scale " +
                   FormatNumber(identity->scale) +
                   ": only views of one scene with the same cameras can be fused");
     }
@@ -345,10 +349,10 @@ json ViewHistograms(const std::vector<FinishedView>& views, const TriangleMesh& 
   const double n = static_cast<double>(per_view.size());
   eval::SigmaHistogramPlotOptions plot;
   plot.title = "Scene: |depth - gt| / sigma over " + std::to_string(per_view.size()) + " views";
-  figures->emplace_back("scene_sigma_histogram.png",
-                        eval::RenderSigmaHistogram({{"views' depth maps", pooled_views},
-                                                    {"scene mesh in the views", pooled_mesh}},
-                                                   plot));
+  figures->emplace_back(
+      "scene_sigma_histogram.png",
+      eval::RenderSigmaHistogram(
+          {{"views' depth maps", pooled_views}, {"scene mesh in the views", pooled_mesh}}, plot));
   return {{"views", per_view},
           {"mean_depth_map_within_3_sigma_percent", sum_view / n},
           {"mean_scene_mesh_within_3_sigma_percent", sum_mesh / n},
@@ -363,8 +367,8 @@ void ModelPictures(const std::vector<FinishedView>& views, const TriangleMesh& m
   const Camera& middle = views[views.size() / 2].view.camera;
   const double enlarge = std::max(1.0, 960.0 / middle.width);
   const Eigen::Vector3d pivot = mesh::MedianVertex(mesh);
-  const std::vector<std::pair<double, double>> angles = {{0.0, 0.0}, {-35.0, 15.0}, {35.0, 15.0},
-                                                         {0.0, 45.0}};
+  const std::vector<std::pair<double, double>> angles = {
+      {0.0, 0.0}, {-35.0, 15.0}, {35.0, 15.0}, {0.0, 45.0}};
   for (size_t i = 0; i < angles.size(); ++i) {
     const Camera view =
         mesh::OrbitCamera(middle.Rescaled(enlarge), angles[i].first, angles[i].second, pivot);
@@ -377,11 +381,20 @@ std::string Escape(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -405,7 +418,8 @@ std::string SceneIndexHtml(const json& report, const std::vector<std::string>& i
        "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:4px 10px;"
        "text-align:right}th{background:#eee}td:first-child{text-align:left}"
        "figure{display:inline-block;margin:0.5em;vertical-align:top}"
-       "img{max-width:640px;border:1px solid #ccc}.small img{max-width:300px}</style></head><body>\n";
+       "img{max-width:640px;border:1px solid #ccc}.small "
+       "img{max-width:300px}</style></head><body>\n";
   h << "<h1>gcpstereo scene</h1>\n<p>Data set <code>" << Escape(report.value("dataset", ""))
     << "</code>; " << report["views"].size() << " views, " << report.value("fused_views", 0)
     << " fused; " << report["fusion"].value("points", 0) << " fused points, "
@@ -447,8 +461,8 @@ std::string SceneIndexHtml(const json& report, const std::vector<std::string>& i
     h << "<tr><td>" << Escape(v.value("name", "")) << "</td><td>" << Escape(v.value("status", ""))
       << (v.contains("error") ? ": " + Escape(v["error"].get<std::string>()) : std::string())
       << "</td><td>" << Percent(v.value("seconds", json())) << "</td><td>"
-      << Escape(v.value("neighbors", json::array()).dump()) << "</td><td>"
-      << v.value("gcps", 0) << "</td></tr>\n";
+      << Escape(v.value("neighbors", json::array()).dump()) << "</td><td>" << v.value("gcps", 0)
+      << "</td></tr>\n";
   }
   h << "</table>\n<div class=\"small\">\n";
   for (const auto& [name, picture] : view_pictures) {
@@ -712,12 +726,7 @@ RunSummary RunScene(const LoadedConfig& config, const std::string& output_dir) {
   const PipelineConfig& o = config.options();
   Timer total;
   OutputFolder out(output_dir);
-  const std::string log_path = out.FinalPath("run.log");
-  AddLogFile(log_path);
-  struct LogFileGuard {
-    std::string path;
-    ~LogFileGuard() { RemoveLogFile(path); }
-  } log_file_guard{log_path};
+  const ScopedLogFile log_file(out.FinalPath("run.log"));
 
   json report;
   report["gcpstereo_version"] = GCPSTEREO_VERSION;
@@ -781,18 +790,14 @@ RunSummary RunScene(const LoadedConfig& config, const std::string& output_dir) {
 
 RunSummary FuseViewFolders(const FuseRequest& request) {
   if (request.view_dirs.empty()) throw Error("fuse: give at least one view folder");
+  for (const std::string& dir : request.view_dirs) CheckViewFolder(dir, {"effective_config.yaml"});
   Timer total;
   // The configuration: the first view's, with the command line's overrides.
   LoadedConfig config;
   config.Load((fs::path(request.view_dirs.front()) / "effective_config.yaml").string(),
               request.overrides);
   OutputFolder out(request.output_dir);
-  const std::string log_path = out.FinalPath("run.log");
-  AddLogFile(log_path);
-  struct LogFileGuard {
-    std::string path;
-    ~LogFileGuard() { RemoveLogFile(path); }
-  } log_file_guard{log_path};
+  const ScopedLogFile log_file(out.FinalPath("run.log"));
 
   json report;
   report["gcpstereo_version"] = GCPSTEREO_VERSION;

@@ -293,15 +293,14 @@ TEST(ListOrScalar, ScalarsListsAndTheirEffectiveYaml) {
   EXPECT_EQ(neighbors, std::vector<std::string>{"im1"});
   // A one-element list that is not one of the scalar words stays a list.
   EXPECT_NE(schema.ToYaml().find("neighbors: [im1]"), std::string::npos) << schema.ToYaml();
-  EXPECT_NE(schema.ToYaml().find("reference: [0003, 0004]"), std::string::npos)
-      << schema.ToYaml();
+  EXPECT_NE(schema.ToYaml().find("reference: [0003, 0004]"), std::string::npos) << schema.ToYaml();
   try {
     schema.ApplyOverride("dataset.neighbors=im2");
     FAIL() << "a scalar other than auto was accepted";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find(
-                  "dataset.neighbors = im2. Violated constraint: a list or auto"),
-              std::string::npos)
+    EXPECT_NE(
+        std::string(e.what()).find("dataset.neighbors = im2. Violated constraint: a list or auto"),
+        std::string::npos)
         << e.what();
   }
   EXPECT_EQ(neighbors, std::vector<std::string>{"im1"});  // unchanged by the failed override

@@ -50,7 +50,7 @@ std::string WriteFile(const fs::path& path, const std::string& text) {
 TEST(Cli, HelpListsTheCommands) {
   const Result r = RunCli("--help", true);
   EXPECT_EQ(r.status, 0);
-  for (const char* command : {"run", "synth", "eval", "demo"}) {
+  for (const char* command : {"run", "fuse", "synth", "eval", "demo"}) {
     EXPECT_NE(r.output.find(command), std::string::npos) << command << " missing in:\n" << r.output;
   }
 }
@@ -219,6 +219,18 @@ TEST(Cli, EvalCameraOfAnotherAspectRatioIsRefused) {
                           " is 320x240 and the depth map " + depth +
                           " 160x107: another aspect ratio (scaled to the map's width, x0.5, the "
                           "camera is 120 px high, not 107); the camera is of another image\n");
+}
+
+TEST(Cli, FuseOfAFolderThatIsNoViewIsOneLineNamingTheFile) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli-fuse");
+  fs::create_directories(dir / "not_a_view");
+  const Result r =
+      RunCli("fuse '" + (dir / "not_a_view").string() + "' -o '" + (dir / "out").string() + "'");
+  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.output,
+            "gcpstereo: error: " + (dir / "not_a_view" / "effective_config.yaml").string() +
+                ": not found: the folder is not a finished per-view run of gcpstereo\n");
+  EXPECT_FALSE(fs::exists(dir / "out" / "fused.ply"));
 }
 
 }  // namespace

@@ -137,8 +137,8 @@ TEST_F(TinySceneRun, ResumesWithTheMissingViews) {
   EXPECT_TRUE(fs::exists(out + "/views/0004/depth.pfm"));
   EXPECT_FALSE(fs::exists(out + "/views/0004/.gcpstereo-staging-999999999"));
   // A changed configuration is not reused.
-  const json changed = RunScene(
-      "resume", {"dataset.reference=[\"0003\", \"0004\", \"0005\"]", "labels.count=40"});
+  const json changed =
+      RunScene("resume", {"dataset.reference=[\"0003\", \"0004\", \"0005\"]", "labels.count=40"});
   EXPECT_EQ(ViewStatus(changed, "0003")["status"], "done");
 }
 
@@ -191,9 +191,9 @@ TEST_F(TinySceneRun, FuseRefusesFoldersOfDifferentScenesOrCameras) {
     FuseViewFolders(request);
     FAIL() << "expected an error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(
-                  "only views of one scene with the same cameras can be fused"),
-              std::string::npos)
+    EXPECT_NE(
+        std::string(e.what()).find("only views of one scene with the same cameras can be fused"),
+        std::string::npos)
         << e.what();
   }
   request.view_dirs = {*dir_ + "/fuse_a/views/0004", *dir_ + "/fuse_a/views/0004"};
@@ -209,9 +209,8 @@ TEST_F(TinySceneRun, FuseRefusesFoldersOfDifferentScenesOrCameras) {
 }
 
 TEST_F(TinySceneRun, AutomaticNeighboursAreRecorded) {
-  const json report =
-      RunScene("auto", {"dataset.reference=[\"0005\", \"0006\"]", "dataset.neighbors=auto",
-                        "dataset.neighbor_count=2"});
+  const json report = RunScene("auto", {"dataset.reference=[\"0005\", \"0006\"]",
+                                        "dataset.neighbors=auto", "dataset.neighbor_count=2"});
   const json view = json::parse(ReadFile(*dir_ + "/auto/views/0005/report.json"));
   ASSERT_TRUE(view["dataset"].contains("neighbor_selection")) << view["dataset"].dump();
   ASSERT_EQ(view["dataset"]["neighbors"].size(), 2u);
@@ -248,9 +247,9 @@ TEST(SceneConfig, BadValuesAreRefusedByName) {
     }
   }
   LoadedConfig kitti;
-  EXPECT_THROW(kitti.Load("", {"dataset.format=kitti_raw", "dataset.path=/x",
-                               "dataset.reference=all"}),
-               ConfigError);
+  EXPECT_THROW(
+      kitti.Load("", {"dataset.format=kitti_raw", "dataset.path=/x", "dataset.reference=all"}),
+      ConfigError);
 }
 
 }  // namespace

@@ -147,6 +147,18 @@ std::vector<std::vector<int>> VertexToTriangles(const std::vector<Triangle>& tri
 }
 
 // For every query sample, the distance to the other surface (see the header for the bound).
+// Rows of float x y z for points[first, first + count) minus `origin`: the KD-tree works in
+// float, so the coordinates are centred first to keep their precision.
+cv::Mat CentredFeatures(const std::vector<Eigen::Vector3d>& points, size_t first, size_t count,
+                        const Eigen::Vector3d& origin) {
+  cv::Mat features(static_cast<int>(count), 3, CV_32F);
+  for (int i = 0; i < features.rows; ++i) {
+    const Eigen::Vector3d p = points[first + i] - origin;
+    for (int k = 0; k < 3; ++k) features.at<float>(i, k) = static_cast<float>(p[k]);
+  }
+  return features;
+}
+
 std::vector<double> DistancesToSurface(const Samples& queries, const Samples& targets,
                                        const std::vector<Triangle>& target_triangles,
                                        size_t target_num_vertices, const Eigen::Vector3d& origin,
@@ -156,12 +168,7 @@ std::vector<double> DistancesToSurface(const Samples& queries, const Samples& ta
   const std::vector<std::vector<int>> adjacency =
       VertexToTriangles(target_triangles, target_num_vertices);
   std::vector<int> candidates;
-  // The KD-tree works in float: centre the coordinates first to keep their precision.
-  cv::Mat features(static_cast<int>(targets.points.size()), 3, CV_32F);
-  for (int i = 0; i < features.rows; ++i) {
-    const Eigen::Vector3d p = targets.points[i] - origin;
-    for (int k = 0; k < 3; ++k) features.at<float>(i, k) = static_cast<float>(p[k]);
-  }
+  const cv::Mat features = CentredFeatures(targets.points, 0, targets.points.size(), origin);
   cv::flann::GenericIndex<cvflann::L2_Simple<float>> index(features,
                                                            cvflann::KDTreeSingleIndexParams(10));
   const int knn = std::min<int>(neighbors, features.rows);
@@ -170,11 +177,7 @@ std::vector<double> DistancesToSurface(const Samples& queries, const Samples& ta
   const int total = static_cast<int>(queries.points.size());
   for (int start = 0; start < total; start += kBatch) {
     const int count = std::min(kBatch, total - start);
-    cv::Mat query(count, 3, CV_32F);
-    for (int i = 0; i < count; ++i) {
-      const Eigen::Vector3d p = queries.points[start + i] - origin;
-      for (int k = 0; k < 3; ++k) query.at<float>(i, k) = static_cast<float>(p[k]);
-    }
+    const cv::Mat query = CentredFeatures(queries.points, start, count, origin);
     cv::Mat indices(count, knn, CV_32S), squared(count, knn, CV_32F);
     // eps = 0: the single KD-tree search is exact.
     index.knnSearch(query, indices, squared, knn, cvflann::SearchParams(-1, 0.0f, true));
@@ -270,22 +273,14 @@ std::vector<double> DistancesToPoints(const Samples& queries, const Samples& tar
                                       const Eigen::Vector3d& origin) {
   std::vector<double> distances(queries.points.size(), std::numeric_limits<double>::infinity());
   if (queries.points.empty() || targets.points.empty()) return distances;
-  cv::Mat features(static_cast<int>(targets.points.size()), 3, CV_32F);
-  for (int i = 0; i < features.rows; ++i) {
-    const Eigen::Vector3d p = targets.points[i] - origin;
-    for (int k = 0; k < 3; ++k) features.at<float>(i, k) = static_cast<float>(p[k]);
-  }
+  const cv::Mat features = CentredFeatures(targets.points, 0, targets.points.size(), origin);
   cv::flann::GenericIndex<cvflann::L2_Simple<float>> index(features,
                                                            cvflann::KDTreeSingleIndexParams(10));
   constexpr int kBatch = 65536;
   const int total = static_cast<int>(queries.points.size());
   for (int start = 0; start < total; start += kBatch) {
     const int count = std::min(kBatch, total - start);
-    cv::Mat query(count, 3, CV_32F);
-    for (int i = 0; i < count; ++i) {
-      const Eigen::Vector3d p = queries.points[start + i] - origin;
-      for (int k = 0; k < 3; ++k) query.at<float>(i, k) = static_cast<float>(p[k]);
-    }
+    const cv::Mat query = CentredFeatures(queries.points, start, count, origin);
     cv::Mat indices(count, 1, CV_32S), squared(count, 1, CV_32F);
     index.knnSearch(query, indices, squared, 1, cvflann::SearchParams(-1, 0.0f, true));
     for (int i = 0; i < count; ++i) {
@@ -382,17 +377,15 @@ MeshAccuracy EvaluateSurface(const Surface& estimate, const Surface& gt,
     throw Error(options.gt_filter ? "EvaluateSurface: no part of the ground truth is observed"
                                   : "EvaluateSurface: the ground-truth point set is empty");
   }
-  const PreparedSide est_side =
-      Prepare(estimate, "estimate", spacing, options.max_samples, options.seed * 2 + 1,
-              &result.degenerate_faces);
+  const PreparedSide est_side = Prepare(estimate, "estimate", spacing, options.max_samples,
+                                        options.seed * 2 + 1, &result.degenerate_faces);
   const Samples& gt_samples = gt_side.samples;
   const Samples& est_samples = est_side.samples;
   result.gt_area = gt_samples.area;
   result.estimate_area = est_samples.area;
   result.gt_samples = static_cast<std::int64_t>(gt_samples.points.size());
   result.estimate_samples = static_cast<std::int64_t>(est_samples.points.size());
-  result.gt_spacing =
-      gt_side.is_mesh ? std::sqrt(gt_samples.area / gt_samples.points.size()) : 0.0;
+  result.gt_spacing = gt_side.is_mesh ? std::sqrt(gt_samples.area / gt_samples.points.size()) : 0.0;
   result.estimate_spacing = est_samples.points.empty() || !est_side.is_mesh
                                 ? 0.0
                                 : std::sqrt(est_samples.area / est_samples.points.size());

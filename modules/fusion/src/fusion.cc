@@ -25,23 +25,19 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-template <typename T>
-std::string Str(T value) {
-  std::ostringstream stream;
-  stream << value;
-  return stream.str();
+std::string MatSize(const cv::Mat& mat) {
+  return std::to_string(mat.cols) + "x" + std::to_string(mat.rows);
 }
-
-std::string MatSize(const cv::Mat& mat) { return Str(mat.cols) + "x" + Str(mat.rows); }
 
 void CheckDepthMap(const cv::Mat& depth, const Camera& camera, const std::string& context) {
   if (depth.empty()) throw Error(context + ": the depth map is empty");
   if (depth.type() != CV_32FC1) {
-    throw Error(context + ": the depth map must be CV_32FC1, got type " + Str(depth.type()));
+    throw Error(context + ": the depth map must be CV_32FC1, got type " +
+                std::to_string(depth.type()));
   }
   if (depth.cols != camera.width || depth.rows != camera.height) {
     throw Error(context + ": the depth map is " + MatSize(depth) + " but the camera is " +
-                Str(camera.width) + "x" + Str(camera.height));
+                std::to_string(camera.width) + "x" + std::to_string(camera.height));
   }
 }
 
@@ -171,7 +167,7 @@ void FuseRow(const std::vector<ViewData>& data,
 void FusionOptions::Check() const {
   if (min_views < 1 || min_views > 64) {
     throw ConfigError(
-        ViolatedConstraint("fusion.min_views", Str(min_views), "1 <= min_views <= 64"));
+        ViolatedConstraint("fusion.min_views", std::to_string(min_views), "1 <= min_views <= 64"));
   }
   if (!(depth_tolerance > 0.0 && depth_tolerance <= 1.0)) {
     throw ConfigError(ViolatedConstraint("fusion.depth_tolerance", FormatNumber(depth_tolerance),
@@ -183,12 +179,13 @@ void FusionOptions::Check() const {
                                          "0 < normal_tolerance_deg <= 180"));
   }
   if (normal_radius_px < 1 || normal_radius_px > 16) {
-    throw ConfigError(ViolatedConstraint("fusion.normal_radius_px", Str(normal_radius_px),
+    throw ConfigError(ViolatedConstraint("fusion.normal_radius_px",
+                                         std::to_string(normal_radius_px),
                                          "1 <= normal_radius_px <= 16"));
   }
   if (stride_px < 1 || stride_px > 64) {
     throw ConfigError(
-        ViolatedConstraint("fusion.stride_px", Str(stride_px), "1 <= stride_px <= 64"));
+        ViolatedConstraint("fusion.stride_px", std::to_string(stride_px), "1 <= stride_px <= 64"));
   }
 }
 
@@ -228,7 +225,8 @@ std::string FusionSummary::FullReport() const {
 cv::Mat DepthMapNormals(const cv::Mat& depth, const Camera& camera, int radius_px) {
   CheckDepthMap(depth, camera, "DepthMapNormals");
   if (radius_px < 1 || radius_px > 16) {
-    throw Error("DepthMapNormals: radius_px = " + Str(radius_px) + ", must be in [1, 16]");
+    throw Error("DepthMapNormals: radius_px = " + std::to_string(radius_px) +
+                ", must be in [1, 16]");
   }
   const int width = depth.cols;
   const int height = depth.rows;
@@ -311,19 +309,20 @@ OrientedPointCloud FuseDepthMaps(const std::vector<FusionView>& views, const Fus
   options.Check();
   if (views.empty()) throw Error("FuseDepthMaps: no views");
   if (views.size() > 65535) {
-    throw Error("FuseDepthMaps: " + Str(views.size()) + " views, at most 65535 are supported");
+    throw Error("FuseDepthMaps: " + std::to_string(views.size()) +
+                " views, at most 65535 are supported");
   }
   std::vector<ViewData> data(views.size());
   for (size_t i = 0; i < views.size(); ++i) {
     const FusionView& view = views[i];
-    const std::string context = "FuseDepthMaps: view " + Str(i) + " '" + view.name + "'";
+    const std::string context = "FuseDepthMaps: view " + std::to_string(i) + " '" + view.name + "'";
     view.camera.Validate(context);
     CheckDepthMap(view.depth, view.camera, context);
     if (view.image_bgr.empty() ||
         (view.image_bgr.type() != CV_8UC3 && view.image_bgr.type() != CV_8UC1)) {
       throw Error(context + ": the image must be CV_8UC3 (BGR) or CV_8UC1, got " +
                   (view.image_bgr.empty() ? std::string("an empty image")
-                                          : "type " + Str(view.image_bgr.type())));
+                                          : "type " + std::to_string(view.image_bgr.type())));
     }
     if (view.image_bgr.size() != view.depth.size()) {
       throw Error(context + ": the image is " + MatSize(view.image_bgr) + " but the depth map is " +
@@ -388,8 +387,8 @@ OrientedPointCloud FuseDepthMaps(const std::vector<FusionView>& views, const Fus
     vs.mean_views_kept = vs.kept > 0 ? static_cast<double>(sum_views) / vs.kept : 0.0;
     s.views.push_back(vs);
     if (progress && !progress(static_cast<double>(source + 1) / views.size())) {
-      throw Error("FuseDepthMaps: cancelled after view " + Str(source) + " '" + views[source].name +
-                  "'");
+      throw Error("FuseDepthMaps: cancelled after view " + std::to_string(source) + " '" +
+                  views[source].name + "'");
     }
   }
   cloud.sigma.assign(cloud.points.size(), 0.0f);
@@ -404,15 +403,16 @@ void AppendGcpPoints(const PointCloud& gcps_world, OrientedPointCloud* cloud) {
   const size_t n = cloud->points.size();
   if (cloud->normals.size() != n || cloud->colors.size() != n || cloud->num_views.size() != n ||
       cloud->sigma.size() != n) {
-    throw Error("AppendGcpPoints: the cloud's channels differ in length (" + Str(n) + " points, " +
-                Str(cloud->normals.size()) + " normals, " + Str(cloud->colors.size()) +
-                " colours, " + Str(cloud->num_views.size()) + " view counts, " +
-                Str(cloud->sigma.size()) + " sigmas)");
+    throw Error("AppendGcpPoints: the cloud's channels differ in length (" + std::to_string(n) +
+                " points, " + std::to_string(cloud->normals.size()) + " normals, " +
+                std::to_string(cloud->colors.size()) + " colours, " +
+                std::to_string(cloud->num_views.size()) + " view counts, " +
+                std::to_string(cloud->sigma.size()) + " sigmas)");
   }
   if (gcps_world.empty()) return;
   if (!gcps_world.sigma.empty() && gcps_world.sigma.size() != gcps_world.size()) {
-    throw Error("AppendGcpPoints: " + Str(gcps_world.size()) + " GCPs but " +
-                Str(gcps_world.sigma.size()) + " sigma values");
+    throw Error("AppendGcpPoints: " + std::to_string(gcps_world.size()) + " GCPs but " +
+                std::to_string(gcps_world.sigma.size()) + " sigma values");
   }
   std::vector<int> fused;
   for (size_t i = 0; i < n; ++i) {

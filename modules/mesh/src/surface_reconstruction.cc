@@ -55,8 +55,11 @@
 // solver (octree neighbour look-ups, constraint updates, iso-surface extraction).
 #include "gcpstereo/mesh/surface_reconstruction.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <mutex>
 #include <sstream>
 #include <vector>
@@ -71,10 +74,66 @@
 #include <nlohmann/json.hpp>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/core/logging.h"
 #include "gcpstereo/core/system.h"
 
 namespace gcpstereo::mesh {
 namespace {
+
+// PCL's Poisson (its bundled PoissonRecon 4) prints diagnostics with printf and fprintf
+// ("Vertex pair not in list 2 [7] (38 78 41)" when marching cubes misses an edge's vertex pair,
+// "[WARNING] Initial residual too low") straight to the terminal, between our progress lines.
+// While the solve runs, file descriptors 1 and 2 go to a temporary file; Finish() restores them
+// and returns the lines, which the caller logs at debug level and counts in the summary.
+class CapturedOutput {
+ public:
+  CapturedOutput() {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    file_ = std::tmpfile();
+    if (file_ == nullptr) return;
+    saved_out_ = dup(1);
+    saved_err_ = dup(2);
+    dup2(fileno(file_), 1);
+    dup2(fileno(file_), 2);
+  }
+  ~CapturedOutput() {
+    Restore();
+    if (file_ != nullptr) std::fclose(file_);
+  }
+  CapturedOutput(const CapturedOutput&) = delete;
+  CapturedOutput& operator=(const CapturedOutput&) = delete;
+
+  std::vector<std::string> Finish() const {
+    Restore();
+    std::vector<std::string> lines;
+    if (file_ == nullptr) return lines;
+    std::rewind(file_);
+    char buffer[512];
+    while (std::fgets(buffer, sizeof buffer, file_) != nullptr) {
+      std::string line(buffer);
+      while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+      if (!line.empty()) lines.push_back(line);
+    }
+    return lines;
+  }
+
+ private:
+  void Restore() const {
+    if (saved_out_ < 0) return;
+    std::fflush(stdout);
+    std::fflush(stderr);
+    dup2(saved_out_, 1);
+    dup2(saved_err_, 2);
+    close(saved_out_);
+    close(saved_err_);
+    saved_out_ = saved_err_ = -1;
+  }
+
+  std::FILE* file_ = nullptr;
+  mutable int saved_out_ = -1;
+  mutable int saved_err_ = -1;
+};
 
 // Automatic trim distance: max(kTrimSpacings × median spacing, kTrimCells × finest cell).
 constexpr double kTrimSpacings = 4.0;
@@ -178,6 +237,7 @@ nlohmann::json SurfaceSummary::ToJson() const {
   j["median_spacing"] = median_spacing;
   j["trim_distance"] = trim_distance;
   j["poisson_seconds"] = poisson_seconds;
+  j["library_messages"] = library_messages;
   j["seconds"] = seconds;
   return j;
 }
@@ -221,6 +281,7 @@ TriangleMesh ReconstructSurface(const OrientedPointCloud& cloud, const SurfaceOp
   }
 
   // The Poisson solve (one thread, see the top of this file).
+  std::vector<std::string> library_messages;
   pcl::PointCloud<pcl::PointNormal> poisson_points;
   std::vector<pcl::Vertices> polygons;
   const Timer poisson_timer;
@@ -233,10 +294,18 @@ TriangleMesh ReconstructSurface(const OrientedPointCloud& cloud, const SurfaceOp
     poisson.setScale(kPoissonScale);
     poisson.setThreads(1);
     poisson.setInputCloud(oriented);
+    const CapturedOutput captured;
     poisson.reconstruct(poisson_points, polygons);
+    library_messages = captured.Finish();
   }
   oriented.reset();
   const double poisson_seconds = poisson_timer.ElapsedSeconds();
+  for (size_t i = 0; i < library_messages.size() && i < 20; ++i) {
+    spdlog::debug("PCL Poisson: {}", library_messages[i]);
+  }
+  if (!library_messages.empty()) {
+    spdlog::debug("PCL Poisson printed {} diagnostic lines", library_messages.size());
+  }
 
   // Nearest input point of every Poisson vertex: its colour and its distance for the trim.
   pcl::KdTreeFLANN<pcl::PointXYZ> tree;
@@ -308,6 +377,7 @@ TriangleMesh ReconstructSurface(const OrientedPointCloud& cloud, const SurfaceOp
     summary->median_spacing = median_spacing;
     summary->trim_distance = trim_distance;
     summary->poisson_seconds = poisson_seconds;
+    summary->library_messages = static_cast<std::int64_t>(library_messages.size());
     summary->seconds = timer.ElapsedSeconds();
   }
   return mesh;

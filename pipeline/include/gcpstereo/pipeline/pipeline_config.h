@@ -30,8 +30,8 @@ namespace gcpstereo::pipeline {
 
 // Keys of the `dataset:` section (../shared/CONTRACT.md).
 struct DatasetOptions {
-  std::string format = "strecha";      // strecha | middlebury | kitti_raw
-  std::string path;                    // the data set's folder (required)
+  std::string format = "strecha";  // strecha | middlebury | kitti_raw
+  std::string path;                // the data set's folder (required)
   // dataset.reference: one view name, a list of names or `all` (a whole scene: every reference's
   // depth map into OUT/views/<name>/, fused into OUT/). `reference` is the single reference's name
   // (LoadedConfig::Load sets it; empty for a scene).
@@ -40,8 +40,9 @@ struct DatasetOptions {
   // Views used for matching; empty = all others; {"auto"} = chosen per reference from the cameras
   // (and the scan's points) by cost::SelectNeighbors, `neighbor_count` of them.
   std::vector<std::string> neighbors;
-  cost::ViewSelectionOptions neighbor_selection;  // dataset.neighbor_count, dataset.neighbor_selection.*
-  double scale = 1.0;                  // image scale before processing, (0, 1]
+  cost::ViewSelectionOptions
+      neighbor_selection;  // dataset.neighbor_count, dataset.neighbor_selection.*
+  double scale = 1.0;      // image scale before processing, (0, 1]
 
   bool AutoNeighbors() const { return neighbors.size() == 1 && neighbors.front() == "auto"; }
   // More than one reference, or `all`.
@@ -80,13 +81,13 @@ struct DepthMapGcpOptions {
 
 // Keys of the `gcp:` section.
 struct GcpOptions {
-  std::vector<std::string> sources;  // lidar | depth_map | stereo; empty = no GCP energy
-  std::string lidar_path;            // gcp.lidar.path
-  DepthMapGcpOptions depth_map;      // gcp.depth_map.*
-  int downsample = 16;               // s: one GCP per s×s block (paper: 16 → ≈0.4 %)
-  gcp::LidarGcpOptions lidar;        // gcp.lidar.*
+  std::vector<std::string> sources;      // lidar | depth_map | stereo; empty = no GCP energy
+  std::string lidar_path;                // gcp.lidar.path
+  DepthMapGcpOptions depth_map;          // gcp.depth_map.*
+  int downsample = 16;                   // s: one GCP per s×s block (paper: 16 → ≈0.4 %)
+  gcp::LidarGcpOptions lidar;            // gcp.lidar.*
   gcp::LidarMotionOptions lidar_motion;  // gcp.lidar.motion.*: the sweep's motion compensation
-  gcp::StereoGcpOptions stereo;      // gcp.stereo.*
+  gcp::StereoGcpOptions stereo;          // gcp.stereo.*
 };
 
 // Keys of the `cost:` section.
@@ -187,7 +188,7 @@ struct PipelineConfig {
   EvalOptions eval;
   RuntimeOptions runtime;
   OutputOptions output;
-  fusion::FusionOptions fusion;    // fusion.*: the scene's depth-map fusion
+  fusion::FusionOptions fusion;      // fusion.*: the scene's depth-map fusion
   bool fusion_include_gcps = false;  // fusion.include_gcps: the views' GCPs join the fused cloud
   // fusion.input: the views' depth.pfm (depth), or their propagated_depth.pfm (propagated: D̂
   // alone, e.g. views run with runtime.stop_after: propagation).

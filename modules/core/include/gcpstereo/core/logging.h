@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 
 #include <spdlog/spdlog.h>
 
@@ -22,6 +23,18 @@ void AddLogFile(const std::string& path);
 void RemoveLogFiles();
 // Removes the file sink of `path` only (a scene's run.log stays while a view's closes).
 void RemoveLogFile(const std::string& path);
+
+// AddLogFile(path) for the lifetime of the object (a run's run.log).
+class ScopedLogFile {
+ public:
+  explicit ScopedLogFile(std::string path) : path_(std::move(path)) { AddLogFile(path_); }
+  ~ScopedLogFile() { RemoveLogFile(path_); }
+  ScopedLogFile(const ScopedLogFile&) = delete;
+  ScopedLogFile& operator=(const ScopedLogFile&) = delete;
+
+ private:
+  std::string path_;
+};
 // Writes `line` at error level to the log files only (whatever the log level): for an error the
 // caller reports on stderr itself.
 void LogToFilesOnly(const std::string& line);

@@ -64,7 +64,7 @@ struct MeshAccuracy {
   double estimate_spacing = 0.0;  // sqrt(area / samples) actually reached
   double gt_spacing = 0.0;
   std::int64_t degenerate_faces = 0;  // zero-area faces or bad indices (ignored), both meshes
-  double gt_kept_fraction = 1.0;  // share of the GT (area or points) the gt_filter accepted
+  double gt_kept_fraction = 1.0;      // share of the GT (area or points) the gt_filter accepted
   nlohmann::json ToJson() const;
 };
 

@@ -55,7 +55,10 @@ struct SurfaceSummary {
   double median_spacing = 0.0;   // median nearest-neighbour distance of the input (scene units)
   double trim_distance = 0.0;    // the trim distance used (scene units)
   double poisson_seconds = 0.0;  // wall-clock time of the Poisson solve alone
-  double seconds = 0.0;          // wall-clock time of the whole call
+  // Diagnostic lines PCL's Poisson printed (captured, logged at debug level; e.g. marching cubes'
+  // "Vertex pair not in list"): a count above 0 flags a surface that may have small holes.
+  std::int64_t library_messages = 0;
+  double seconds = 0.0;  // wall-clock time of the whole call
 
   nlohmann::json ToJson() const;
   std::string FullReport() const;
