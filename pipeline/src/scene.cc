@@ -263,13 +263,17 @@ std::string GroundTruthFile(const std::string& configured, const SceneIdentity& 
   return fs::is_regular_file(candidate, ec) ? candidate.string() : std::string();
 }
 
-// The part of the true surface the views observed: a point counts when some view sees it — in
-// front, inside the image, and not behind that view's true surface there (its ground-truth depth
-// map, or the GT mesh rendered into it; without either, the frustum alone decides). Completeness
-// against the whole GT surface would count the far ground and the walls behind the cameras.
+// The part of the true surface the views observed: a point counts when at least `min_views`
+// views see it — in front, inside the image, and not behind that view's true surface there (its
+// ground-truth depth map, or the GT mesh rendered into it; without either, the frustum alone
+// decides). Completeness against the whole GT surface would count the far ground and the walls
+// behind the cameras; against what fewer views see than the fusion requires (fusion.min_views),
+// surface no fused point can stand for by construction.
 class ObservedRegion {
  public:
-  ObservedRegion(const std::vector<FinishedView>& views, const TriangleMesh* gt_mesh) {
+  ObservedRegion(const std::vector<FinishedView>& views, const TriangleMesh* gt_mesh,
+                 int min_views)
+      : min_views_(std::max(1, min_views)) {
     for (const FinishedView& v : views) {
       cv::Mat depth = v.ground_truth.depth;
       if (depth.empty() && gt_mesh != nullptr) {
@@ -280,22 +284,27 @@ class ObservedRegion {
     }
   }
   bool operator()(const Eigen::Vector3d& point) const {
-    for (size_t i = 0; i < cameras_.size(); ++i) {
+    int seen = 0;
+    for (size_t i = 0; i < cameras_.size() && seen < min_views_; ++i) {
       Eigen::Vector2d pixel;
       double z = 0.0;
       if (!cameras_[i].Project(point, &pixel, &z) || !cameras_[i].InImage(pixel)) continue;
-      if (depths_[i].empty()) return true;
+      if (depths_[i].empty()) {
+        ++seen;
+        continue;
+      }
       const int col = std::clamp(static_cast<int>(std::lround(pixel.x())), 0, depths_[i].cols - 1);
       const int row = std::clamp(static_cast<int>(std::lround(pixel.y())), 0, depths_[i].rows - 1);
       const float surface = depths_[i].at<float>(row, col);
-      if (IsValidDepth(surface) && z <= surface * (1.0 + kDepthTolerance)) return true;
+      if (IsValidDepth(surface) && z <= surface * (1.0 + kDepthTolerance)) ++seen;
     }
-    return false;
+    return seen >= min_views_;
   }
   // A point this much (relative) behind the surface seen at its pixel still counts as seen.
   static constexpr double kDepthTolerance = 0.01;
 
  private:
+  int min_views_;
   std::vector<Camera> cameras_;
   std::vector<cv::Mat> depths_;
 };
@@ -564,7 +573,7 @@ json FuseMeshEvaluate(const std::vector<std::string>& view_dirs, const PipelineC
   accuracy_options.max_samples = o.eval.scene.max_samples;
   std::optional<TriangleMesh> gt_mesh;
   if (!gt_mesh_path.empty()) gt_mesh = io::ReadMeshPly(gt_mesh_path);
-  const ObservedRegion observed(views, gt_mesh ? &*gt_mesh : nullptr);
+  const ObservedRegion observed(views, gt_mesh ? &*gt_mesh : nullptr, o.fusion.min_views);
   accuracy_options.gt_filter = [&observed](const Eigen::Vector3d& p) { return observed(p); };
   if (gt_mesh) {
     metrics["gt_mesh"] = gt_mesh_path;
@@ -586,8 +595,8 @@ json FuseMeshEvaluate(const std::vector<std::string>& view_dirs, const PipelineC
   }
   if (gt_mesh || !gt_points_path.empty()) {
     metrics["ground_truth_region"] =
-        "the part of the ground truth some view observes (in its image, not behind its true "
-        "surface)";
+        "the part of the ground truth that at least fusion.min_views views observe (in their "
+        "images, not behind their true surface)";
   }
   if (o.eval.scene.view_histograms) {
     json histograms = ViewHistograms(views, mesh, &figures);
