@@ -31,21 +31,25 @@ void AddCostFilterKeys(config::Schema* s, const std::string& prefix, const std::
 }  // namespace
 
 void PipelineConfig::Register(config::Schema* s) {
-  s->Add("dataset.format", &dataset.format, {"strecha", "middlebury", "kitti_raw"},
+  s->Add("dataset.format", &dataset.format, {"strecha", "middlebury", "kitti_raw", "colmap"},
          {"data set layout: strecha (images/ + cameras/*.camera; also the synthetic sets), "
-          "middlebury (official file names), kitti_raw (a drive folder)"});
+          "middlebury (official file names), kitti_raw (a drive folder), colmap (a COLMAP "
+          "workspace: images/ + sparse/ with cameras, images, points3D as .bin or .txt; "
+          "distorting camera models are undistorted on load)"});
   s->Add("dataset.path", &dataset.path, {},
          {"the data set's folder (kitti_raw: <date>/<date>_drive_NNNN_sync); relative paths are "
           "relative to the working directory"});
   s->AddListOrScalar(
       "dataset.reference", &dataset.references, {},
       {"reference view: strecha 0005; middlebury im2, scene1.row3.col3, view1; kitti_raw the "
-       "frame 0000000010. A list of names or all = a whole scene: each reference's depth map into "
-       "OUT/views/<name>/, fused and meshed into OUT/ (strecha, middlebury)"});
+       "frame 0000000010; colmap the model's image name, 0005.jpg. A list of names or all = a "
+       "whole scene: each reference's depth map into OUT/views/<name>/, fused and meshed into "
+       "OUT/ (strecha, middlebury, colmap)"});
   s->AddListOrScalar("dataset.neighbors", &dataset.neighbors, {"auto"},
                      {"views used for matching; empty = all other views; auto = the "
-                      "dataset.neighbor_count best by triangulation angle and shared visible area "
-                      "(ignored for kitti_raw)"});
+                      "dataset.neighbor_count best by triangulation angle and shared visible area, "
+                      "scored on the laser scan's points, a COLMAP model's 3D points (colmap) or "
+                      "the cameras' frusta (ignored for kitti_raw)"});
   s->Add("dataset.neighbor_count", &dataset.neighbor_selection.count, Range::Between(1, 64),
          {"dataset.neighbors: auto: how many neighbours each reference gets (fewer when fewer "
           "views see its scene)"});
@@ -83,10 +87,11 @@ void PipelineConfig::Register(config::Schema* s) {
 
   s->Add("gcp.sources", &gcp.sources, {"lidar", "depth_map", "stereo"},
          {"GCP sources; empty list = no GCP energy (the paper's baseline)"});
-  s->Add("gcp.lidar.path", &gcp.lidar_path, {},
-         {"point cloud (.ply, .pcd, KITTI .bin): world frame for strecha, sensor frame for "
-          "kitti_raw (the scan of the dataset.reference frame: a file named after another frame "
-          "warns)"});
+  s->Add(
+      "gcp.lidar.path", &gcp.lidar_path, {},
+      {"point cloud (.ply, .pcd, KITTI .bin): world frame for strecha and colmap, sensor frame for "
+       "kitti_raw (the scan of the dataset.reference frame: a file named after another frame "
+       "warns)"});
   s->Add("gcp.depth_map.path", &gcp.depth_map.path, {},
          {"depth or disparity image of the reference view (PFM, 8/16-bit PNG/PGM; 0 or non-finite "
           "= no measurement)"});
@@ -549,9 +554,10 @@ void PipelineConfig::Check() const {
     throw ConfigError(ViolatedConstraint("labels.min", std::to_string(*labels.min),
                                          "labels.min > 0 for depth labels"));
   }
-  if (labels.space == "disparity" && dataset.format == "strecha") {
+  if (labels.space == "disparity" && (dataset.format == "strecha" || dataset.format == "colmap")) {
     throw ConfigError(ViolatedConstraint("labels.space", "disparity",
-                                         "depth or inverse_depth for calibrated (strecha) data; "
+                                         "depth or inverse_depth for calibrated (strecha, colmap) "
+                                         "data; "
                                          "disparity needs rectified data"));
   }
   if (gcp.lidar_motion.mode != "off" && dataset.format != "kitti_raw") {

@@ -25,6 +25,7 @@
 #include "gcpstereo/eval/render.h"
 #include "gcpstereo/fusion/fusion.h"
 #include "gcpstereo/io/atomic_file.h"
+#include "gcpstereo/io/colmap_io.h"
 #include "gcpstereo/io/dataset_io.h"
 #include "gcpstereo/io/image_io.h"
 #include "gcpstereo/io/mesh_io.h"
@@ -97,15 +98,31 @@ SceneCameras LoadSceneCameras(const PipelineConfig& o) {
   return scene;
 }
 
-// The scan's points in the world frame (strecha: the scan defines it), at most kMaxPoints of them
-// (every k-th): where the scene is, for the view selection. Empty without a LiDAR source.
+// Where the scene is, for the view selection, in the world frame, at most kMaxPoints points
+// (every k-th): a COLMAP model's own 3D points (colmap; the reference's visible share of them is
+// what the selection scores), else the scan's points (strecha and colmap with a LiDAR source: the
+// scan is in the world frame). Empty otherwise (the selection then uses the frustum basis).
 std::vector<Eigen::Vector3d> SelectionPoints(const PipelineConfig& o) {
   constexpr size_t kMaxPoints = 20000;
   std::vector<Eigen::Vector3d> points;
-  if (!HasLidar(o) || o.dataset.format != "strecha") return points;
+  auto every_kth = [&points](size_t size, const auto& point_at) {
+    const size_t step = std::max<size_t>(1, (size + kMaxPoints - 1) / kMaxPoints);
+    for (size_t i = 0; i < size; i += step) points.push_back(point_at(i));
+  };
+  if (o.dataset.format == "colmap") {
+    const io::ColmapModel model = io::ReadColmapModel(io::ColmapSparseDir(o.dataset.path));
+    std::vector<Eigen::Vector3d> all;
+    for (const auto& [id, point] : model.points3d) all.push_back(point.xyz_world);
+    if (!all.empty()) {
+      every_kth(all.size(), [&all](size_t i) { return all[i]; });
+      return points;
+    }
+  }
+  if (!HasLidar(o) || (o.dataset.format != "strecha" && o.dataset.format != "colmap")) {
+    return points;
+  }
   const PointCloud cloud = io::ReadPointCloud(o.gcp.lidar_path);
-  const size_t step = std::max<size_t>(1, (cloud.size() + kMaxPoints - 1) / kMaxPoints);
-  for (size_t i = 0; i < cloud.size(); i += step) points.push_back(cloud.points[i].cast<double>());
+  every_kth(cloud.size(), [&cloud](size_t i) { return cloud.points[i].cast<double>(); });
   return points;
 }
 
@@ -271,8 +288,7 @@ std::string GroundTruthFile(const std::string& configured, const SceneIdentity& 
 // surface no fused point can stand for by construction.
 class ObservedRegion {
  public:
-  ObservedRegion(const std::vector<FinishedView>& views, const TriangleMesh* gt_mesh,
-                 int min_views)
+  ObservedRegion(const std::vector<FinishedView>& views, const TriangleMesh* gt_mesh, int min_views)
       : min_views_(std::max(1, min_views)) {
     for (const FinishedView& v : views) {
       cv::Mat depth = v.ground_truth.depth;

@@ -21,7 +21,12 @@ namespace {
 using nlohmann::json;
 
 json ViewJson(const View& v) {
-  return {{"name", v.name}, {"width", v.image.cols}, {"height", v.image.rows}};
+  json view = {{"name", v.name}, {"width", v.image.cols}, {"height", v.image.rows}};
+  if (!v.source_camera_model.empty()) {
+    view["camera_model"] = v.source_camera_model;
+    view["undistorted"] = v.undistorted;
+  }
+  return view;
 }
 
 // KITTI raw: gcp.lidar.path is velodyne_points/data/NNNNNNNNNN.bin of one frame, and nothing ties

@@ -182,10 +182,10 @@ TEST_F(StrechaDataset, MissingImageFolderAndBadRequest) {
   EXPECT_EQ(ErrorOf([&] { LoadDataset(r); }),
             "dataset.scale = 0. Violated constraint: 0 < dataset.scale <= 4");
   r = Request();
-  r.format = "colmap";
-  EXPECT_EQ(
-      ErrorOf([&] { LoadDataset(r); }),
-      "dataset.format = 'colmap'. Violated constraint: one of strecha, middlebury, kitti_raw");
+  r.format = "bundler";
+  EXPECT_EQ(ErrorOf([&] { LoadDataset(r); }),
+            "dataset.format = 'bundler'. Violated constraint: one of strecha, middlebury, "
+            "kitti_raw, colmap");
 }
 
 TEST_F(StrechaDataset, GroundTruthOfWrongSize) {

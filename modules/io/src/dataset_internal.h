@@ -1,5 +1,6 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
-// Helpers shared by the data set loaders (strecha_io.cc, middlebury_io.cc, kitti_io.cc).
+// Helpers shared by the data set loaders (strecha_io.cc, middlebury_io.cc, kitti_io.cc,
+// colmap_dataset_io.cc).
 #pragma once
 
 #include <string>
@@ -38,6 +39,7 @@ std::string LowerExtension(const std::string& path);
 std::vector<std::string> StrechaViewNames(const std::string& path);
 std::vector<std::string> MiddleburyViewNames(const std::string& path);
 std::vector<std::string> KittiFrameNames(const std::string& drive_path);
+std::vector<std::string> ColmapViewNames(const std::string& path);
 
 bool IsFile(const std::string& path);
 bool IsFolder(const std::string& path);

@@ -113,8 +113,9 @@ Dataset LoadDataset(const DatasetRequest& request) {
   if (request.format == "strecha") return LoadStrechaDataset(request);
   if (request.format == "middlebury") return LoadMiddleburyDataset(request);
   if (request.format == "kitti_raw") return LoadKittiRawDataset(request);
+  if (request.format == "colmap") return LoadColmapDataset(request);
   throw ConfigError(ViolatedConstraint("dataset.format", "'" + request.format + "'",
-                                       "one of strecha, middlebury, kitti_raw"));
+                                       "one of strecha, middlebury, kitti_raw, colmap"));
 }
 
 std::vector<std::string> ListDatasetViews(const std::string& format, const std::string& path) {
@@ -122,8 +123,9 @@ std::vector<std::string> ListDatasetViews(const std::string& format, const std::
   if (format == "strecha") return internal::StrechaViewNames(path);
   if (format == "middlebury") return internal::MiddleburyViewNames(path);
   if (format == "kitti_raw") return internal::KittiFrameNames(path);
+  if (format == "colmap") return internal::ColmapViewNames(path);
   throw ConfigError(ViolatedConstraint("dataset.format", "'" + format + "'",
-                                       "one of strecha, middlebury, kitti_raw"));
+                                       "one of strecha, middlebury, kitti_raw, colmap"));
 }
 
 std::string KittiVelodynePath(const std::string& drive_path, const std::string& frame) {

@@ -30,7 +30,7 @@ namespace gcpstereo::pipeline {
 
 // Keys of the `dataset:` section (../shared/CONTRACT.md).
 struct DatasetOptions {
-  std::string format = "strecha";  // strecha | middlebury | kitti_raw
+  std::string format = "strecha";  // strecha | middlebury | kitti_raw | colmap
   std::string path;                // the data set's folder (required)
   // dataset.reference: one view name, a list of names or `all` (a whole scene: every reference's
   // depth map into OUT/views/<name>/, fused into OUT/). `reference` is the single reference's name

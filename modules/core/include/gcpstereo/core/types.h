@@ -24,6 +24,11 @@ struct View {
   std::string name;
   cv::Mat image;
   Camera camera;
+  // Where the camera came from, for the report: the source's camera model (COLMAP's "PINHOLE",
+  // "OPENCV", …; empty for formats with one model) and whether the loader undistorted the image
+  // into `camera` (then `image` is the undistorted image).
+  std::string source_camera_model;
+  bool undistorted = false;
 };
 
 // Ground truth that a data set may carry for its reference view. Empty Mats mean "not available".
@@ -86,7 +91,7 @@ struct GcpSet {
 
 // A loaded data set: the reference view, its neighbours, and what else the set provides.
 struct Dataset {
-  std::string format;  // "strecha", "middlebury", "kitti_raw"
+  std::string format;  // "strecha", "middlebury", "kitti_raw", "colmap"
   std::string path;
   View reference;
   std::vector<View> neighbors;

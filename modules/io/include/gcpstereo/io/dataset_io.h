@@ -11,7 +11,7 @@ namespace gcpstereo::io {
 // What to load (configuration keys dataset.format, dataset.path, dataset.reference,
 // dataset.neighbors, dataset.scale).
 struct DatasetRequest {
-  std::string format;                  // "strecha", "middlebury" or "kitti_raw"
+  std::string format;                  // "strecha", "middlebury", "kitti_raw" or "colmap"
   std::string path;                    // the data set's folder (kitti_raw: the drive folder)
   std::string reference;               // reference view name ("0005", "im2", "0000000010")
   std::vector<std::string> neighbors;  // neighbour names; empty = all other views (kitti: ignored)
@@ -34,12 +34,21 @@ struct DatasetRequest {
 //             present. See middlebury_io.cc for the camera model and disparity scales.
 // kitti_raw   <path> = <date>/<date>_drive_NNNN_sync, calibration from the parent folder; reference
 //             = frame name, left image_02 = reference, right image_03 = the single neighbour.
+// colmap      a COLMAP workspace as `colmap image_undistorter` writes it: <path>/images/<name> and
+//             <path>/sparse/{cameras,images,points3D}.{bin,txt} (colmap_io.h). View names are the
+//             model's image names ("0005.jpg", may contain sub-folders). PINHOLE and
+//             SIMPLE_PINHOLE cameras are used as they are; SIMPLE_RADIAL, RADIAL, OPENCV and
+//             FULL_OPENCV images are undistorted on load (View::undistorted,
+//             View::source_camera_model); any other model is an error naming it and the camera
+//             id. Each image must have its camera's size. Scale as for strecha; no ground truth.
+//             rectified = false, world_from_lidar = I (the model's frame is the world frame).
 Dataset LoadDataset(const DatasetRequest& request);
 
 // The individual loaders (LoadDataset dispatches to them).
 Dataset LoadStrechaDataset(const DatasetRequest& request);
 Dataset LoadMiddleburyDataset(const DatasetRequest& request);
 Dataset LoadKittiRawDataset(const DatasetRequest& request);
+Dataset LoadColmapDataset(const DatasetRequest& request);
 
 // Names of the views a data set folder offers (sorted as the loader numbers them), for messages and
 // for tools. Throws like the loaders when the folder is not a data set of that format.
