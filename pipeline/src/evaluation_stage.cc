@@ -96,6 +96,9 @@ cv::Mat RenderGcpOverlay(const cv::Mat& image_bgr, const GcpSet& gcps) {
       case GcpSource::kStereo:
         color = cv::Scalar(255, 128, 0);
         break;  // blue
+      case GcpSource::kSfm:
+        color = cv::Scalar(255, 0, 255);
+        break;  // magenta
     }
     cv::circle(out, cv::Point(g.col, g.row), radius, color, cv::FILLED, cv::LINE_AA);
   }

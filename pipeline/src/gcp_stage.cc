@@ -2,9 +2,12 @@
 // Stage 2: ground control points from the configured sources (LiDAR, a depth image, image matches).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 
@@ -14,7 +17,9 @@
 #include "gcpstereo/gcp/calibrated_stereo_gcps.h"
 #include "gcpstereo/gcp/gcp_sources.h"
 #include "gcpstereo/gcp/lidar_holdout.h"
+#include "gcpstereo/gcp/sfm_gcps.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
+#include "gcpstereo/io/colmap_io.h"
 #include "gcpstereo/io/image_io.h"
 #include "gcpstereo/io/pfm.h"
 #include "gcpstereo/io/point_cloud_io.h"
@@ -36,6 +41,9 @@ json SummaryJson(const gcp::GcpSourceSummary& s) {
           {"outside_image", s.num_outside_image},
           {"same_pixel", s.num_same_pixel},
           {"inconsistent", s.num_inconsistent},
+          {"short_track", s.num_short_track},
+          {"large_error", s.num_large_error},
+          {"small_angle", s.num_small_angle},
           {"gcps", s.num_gcps},
           {"density_percent", s.density_percent}};
 }
@@ -98,6 +106,44 @@ cv::Mat ReadDepthMapSource(const DepthMapGcpOptions& options, const Dataset& dat
         "gcp.depth_map.kind = disparity needs rectified data (middlebury, kitti_raw)");
   }
   return gcp::DisparityToDepth(values, dataset.disparity_numerator);
+}
+
+// The COLMAP model's 3D points that the reference image observes (its keypoints' point3D ids),
+// each once, with its error, track length and the centres of the track's other images.
+std::vector<gcp::SfmPoint> ObservedSfmPoints(const std::string& workspace,
+                                             const std::string& reference_name) {
+  const io::ColmapModel model = io::ReadColmapModel(io::ColmapSparseDir(workspace));
+  const io::ColmapImage* image = model.FindImage(reference_name);
+  if (!image) {
+    throw ConfigError("gcp.sources: sfm: the COLMAP model " + model.sparse_dir +
+                      " has no image named " + reference_name);
+  }
+  std::vector<gcp::SfmPoint> points;
+  std::vector<std::uint64_t> seen;
+  for (const io::ColmapPoint2D& keypoint : image->points2d) {
+    if (!keypoint.HasPoint3D()) continue;
+    seen.push_back(keypoint.point3d_id);
+  }
+  std::sort(seen.begin(), seen.end());
+  seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+  for (const std::uint64_t id : seen) {
+    const io::ColmapPoint3D& p = model.points3d.at(id);
+    gcp::SfmPoint point;
+    point.point_world = p.xyz_world;
+    point.error_px = p.error_px;
+    std::vector<std::uint32_t> images;
+    for (const io::ColmapTrackElement& e : p.track) images.push_back(e.image_id);
+    std::sort(images.begin(), images.end());
+    images.erase(std::unique(images.begin(), images.end()), images.end());
+    point.track_length = static_cast<int>(images.size());
+    for (const std::uint32_t other : images) {
+      if (other != image->image_id) {
+        point.other_centers_world.push_back(model.images.at(other).CenterWorld());
+      }
+    }
+    points.push_back(std::move(point));
+  }
+  return points;
 }
 
 }  // namespace
@@ -173,6 +219,16 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       }
       sets[index] = gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference,
                                             config.gcp.lidar, &summary);
+    } else if (source == "sfm") {
+      const std::vector<gcp::SfmPoint> points =
+          ObservedSfmPoints(config.dataset.path, dataset.reference.name);
+      sets[index] =
+          gcp::GcpsFromSfmPoints(points, reference, config.dataset.scale, config.gcp.sfm, &summary);
+      spdlog::info(
+          "sfm GCPs: {} of the {} model points the reference observes ({} short tracks, {} with "
+          "large errors, {} at small angles, {} sharing a pixel)",
+          summary.num_gcps, summary.num_input, summary.num_short_track, summary.num_large_error,
+          summary.num_small_angle, summary.num_same_pixel);
     } else if (source == "depth_map") {
       const cv::Mat depth = ReadDepthMapSource(config.gcp.depth_map, dataset, config.dataset.scale);
       sets[index] =

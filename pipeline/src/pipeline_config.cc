@@ -85,8 +85,9 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("labels.max", &labels.max, Range::AtLeast(0.0),
          {"highest hypothesis; auto as labels.min"});
 
-  s->Add("gcp.sources", &gcp.sources, {"lidar", "depth_map", "stereo"},
-         {"GCP sources; empty list = no GCP energy (the paper's baseline)"});
+  s->Add("gcp.sources", &gcp.sources, {"lidar", "depth_map", "stereo", "sfm"},
+         {"GCP sources; empty list = no GCP energy (the paper's baseline); sfm = the 3D points "
+          "of a COLMAP model (dataset.format colmap) that the reference observes"});
   s->Add(
       "gcp.lidar.path", &gcp.lidar_path, {},
       {"point cloud (.ply, .pcd, KITTI .bin): world frame for strecha and colmap, sensor frame for "
@@ -133,6 +134,20 @@ void PipelineConfig::Register(config::Schema* s) {
          {"sigma of points whose cloud carries none (HDL-64E ≈ 0.02)", "m"});
   s->Add("gcp.lidar.min_depth", &gcp.lidar.min_depth, Range::AtLeast(0.0),
          {"ignore points nearer than this depth", "m"});
+  s->Add("gcp.sfm.min_track_length", &gcp.sfm.min_track_length, Range::AtLeast(2),
+         {"sfm: drop model points observed in fewer images (the reference included)"});
+  s->Add("gcp.sfm.max_error_px", &gcp.sfm.max_error_px, Range::GreaterThan(0.0),
+         {"sfm: drop model points whose mean reprojection error (COLMAP's ERROR, pixels of the "
+          "model's images) is larger",
+          "px"});
+  s->Add("gcp.sfm.min_angle_deg", &gcp.sfm.min_angle_deg, Range{0.0, 90.0, false, false},
+         {"sfm: drop model points whose widest triangulation angle with the reference's ray is "
+          "smaller (ill-determined depth)",
+          "deg"});
+  s->Add("gcp.sfm.min_error_px", &gcp.sfm.min_error_px, Range::GreaterThan(0.0),
+         {"sfm: smallest image error the GCP sigma assumes, sigma = min over the other observers "
+          "i of d_i (e / f) / sin(theta_i), e = max(ERROR, this)",
+          "px"});
   s->Add("gcp.lidar.motion.mode", &gcp.lidar_motion.mode, {"off", "given", "registration"},
          {"motion compensation of a spinning scanner's sweep (kitti_raw): off; given = "
           "gcp.lidar.motion.speed_mps and yaw_rate_deg_s; registration = ego-motion from ICP "
@@ -502,6 +517,7 @@ void PipelineConfig::Check() const {
   gcp.lidar.Check();
   gcp.lidar_motion.Check();
   gcp.stereo.Check();
+  gcp.sfm.Check();
   cost.plane_sweep.Check();
   cost.birchfield_tomasi.Check();
   label_range.Check();
@@ -581,6 +597,12 @@ void PipelineConfig::Check() const {
     }
     if (source == "depth_map" && gcp.depth_map.path.empty()) {
       throw ConfigError("gcp.sources lists depth_map but gcp.depth_map.path is not set");
+    }
+    if (source == "sfm" && dataset.format != "colmap") {
+      throw ConfigError(ViolatedConstraint("gcp.sources", "sfm",
+                                           "sfm needs dataset.format colmap (the SfM points are "
+                                           "the COLMAP model's), not " +
+                                               dataset.format));
     }
   }
 }

@@ -11,6 +11,8 @@ const char* GcpSourceName(GcpSource source) {
       return "depth_map";
     case GcpSource::kStereo:
       return "stereo";
+    case GcpSource::kSfm:
+      return "sfm";
   }
   return "unknown";
 }

@@ -83,6 +83,10 @@ void WriteGcpsPly(const std::string& path, const GcpSet& gcps, const Camera& ref
       case GcpSource::kStereo:
         rgb[2] = 255;
         break;
+      case GcpSource::kSfm:  // yellow
+        rgb[0] = 255;
+        rgb[1] = 255;
+        break;
     }
     AppendLittleEndian(&bytes, rgb[0]);
     AppendLittleEndian(&bytes, rgb[1]);

@@ -15,6 +15,7 @@
 #include "gcpstereo/cost/view_selection.h"
 #include "gcpstereo/fusion/fusion.h"
 #include "gcpstereo/gcp/gcp_sources.h"
+#include "gcpstereo/gcp/sfm_gcps.h"
 #include "gcpstereo/gcp/stereo_gcps.h"
 #include "gcpstereo/gcp/sweep_motion.h"
 #include "gcpstereo/mesh/meshing.h"
@@ -81,13 +82,14 @@ struct DepthMapGcpOptions {
 
 // Keys of the `gcp:` section.
 struct GcpOptions {
-  std::vector<std::string> sources;      // lidar | depth_map | stereo; empty = no GCP energy
+  std::vector<std::string> sources;      // lidar | depth_map | stereo | sfm; empty = no GCP energy
   std::string lidar_path;                // gcp.lidar.path
   DepthMapGcpOptions depth_map;          // gcp.depth_map.*
   int downsample = 16;                   // s: one GCP per s×s block (paper: 16 → ≈0.4 %)
   gcp::LidarGcpOptions lidar;            // gcp.lidar.*
   gcp::LidarMotionOptions lidar_motion;  // gcp.lidar.motion.*: the sweep's motion compensation
   gcp::StereoGcpOptions stereo;          // gcp.stereo.*
+  gcp::SfmGcpOptions sfm;                // gcp.sfm.*: a COLMAP model's points (colmap)
 };
 
 // Keys of the `cost:` section.

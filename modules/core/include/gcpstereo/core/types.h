@@ -70,8 +70,9 @@ struct OrientedPointCloud {
   bool empty() const { return points.empty(); }
 };
 
-// Where a ground control point came from (paper §4.1: image matches; §4.2: laser scan).
-enum class GcpSource : std::uint8_t { kLidar = 0, kDepthMap = 1, kStereo = 2 };
+// Where a ground control point came from (paper §4.1: image matches; §4.2: laser scan; §1's
+// "structure from motion point clouds": a COLMAP model's 3D points).
+enum class GcpSource : std::uint8_t { kLidar = 0, kDepthMap = 1, kStereo = 2, kSfm = 3 };
 const char* GcpSourceName(GcpSource source);
 
 // A ground control point of the reference view: a pixel with a measured depth.

@@ -18,13 +18,16 @@ namespace gcpstereo::gcp {
 
 // What one source contributed and why points were dropped. Lands in report.json.
 struct GcpSourceSummary {
-  std::string source;         // "lidar", "depth_map", "stereo"
+  std::string source;         // "lidar", "depth_map", "stereo", "sfm"
   int num_input = 0;          // points / valid pixels / matches offered by the source
   int num_invalid = 0;        // non-finite coordinates or depth <= min depth
   int num_behind_camera = 0;  // lidar: z <= 0 in the reference camera
   int num_outside_image = 0;  // lidar: projected outside the image
   int num_same_pixel = 0;     // lidar: lost the z-buffer (a nearer point on the same pixel)
   int num_inconsistent = 0;   // lidar: farther than a nearer neighbour allows (seen through a gap)
+  int num_short_track = 0;    // sfm: seen in fewer than gcp.sfm.min_track_length images
+  int num_large_error = 0;    // sfm: mean reprojection error above gcp.sfm.max_error_px
+  int num_small_angle = 0;    // sfm: triangulation angle below gcp.sfm.min_angle_deg
   int num_gcps = 0;           // GCPs produced
   double density_percent = 0.0;  // 100 · num_gcps / (width · height)
 };

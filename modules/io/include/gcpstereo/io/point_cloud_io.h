@@ -24,8 +24,8 @@ PointCloud ReadPointCloud(const std::string& path);
 
 // Writes the GCPs of the reference view as 3D points in world coordinates
 // (reference.BackProject(pixel, depth)), binary little-endian PLY with float x y z, uchar red green
-// blue (a colour per source: lidar red, depth_map green, stereo blue), float sigma, uchar source
-// (0 lidar, 1 depth_map, 2 stereo), int col, int row and float depth. Atomic.
+// blue (a colour per source: lidar red, depth_map green, stereo blue, sfm yellow), float sigma,
+// uchar source (0 lidar, 1 depth_map, 2 stereo, 3 sfm), int col, int row and float depth. Atomic.
 void WriteGcpsPly(const std::string& path, const GcpSet& gcps, const Camera& reference);
 
 // Writes a fused cloud (fused.ply): binary little-endian PLY with one `vertex` element of the
