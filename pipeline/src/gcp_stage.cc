@@ -109,9 +109,10 @@ cv::Mat ReadDepthMapSource(const DepthMapGcpOptions& options, const Dataset& dat
 }
 
 // The COLMAP model's 3D points that the reference image observes (its keypoints' point3D ids),
-// each once, with its error, track length and the centres of the track's other images.
-std::vector<gcp::SfmPoint> ObservedSfmPoints(const std::string& workspace,
-                                             const std::string& reference_name) {
+// each once, with its error, track length and the centres of the track's other images; with
+// `all`, every other point of the model too (observed = false).
+std::vector<gcp::SfmPoint> SfmPointsOfReference(const std::string& workspace,
+                                                const std::string& reference_name, bool all) {
   const io::ColmapModel model = io::ReadColmapModel(io::ColmapSparseDir(workspace));
   const io::ColmapImage* image = model.FindImage(reference_name);
   if (!image) {
@@ -126,9 +127,16 @@ std::vector<gcp::SfmPoint> ObservedSfmPoints(const std::string& workspace,
   }
   std::sort(seen.begin(), seen.end());
   seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
-  for (const std::uint64_t id : seen) {
+  std::vector<std::uint64_t> ids = seen;
+  if (all) {
+    for (const auto& [id, p] : model.points3d) {
+      if (!std::binary_search(seen.begin(), seen.end(), id)) ids.push_back(id);
+    }
+  }
+  for (const std::uint64_t id : ids) {
     const io::ColmapPoint3D& p = model.points3d.at(id);
     gcp::SfmPoint point;
+    point.observed = std::binary_search(seen.begin(), seen.end(), id);
     point.point_world = p.xyz_world;
     point.error_px = p.error_px;
     std::vector<std::uint32_t> images;
@@ -220,15 +228,18 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       sets[index] = gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference,
                                             config.gcp.lidar, &summary);
     } else if (source == "sfm") {
-      const std::vector<gcp::SfmPoint> points =
-          ObservedSfmPoints(config.dataset.path, dataset.reference.name);
-      sets[index] =
-          gcp::GcpsFromSfmPoints(points, reference, config.dataset.scale, config.gcp.sfm, &summary);
+      const std::vector<gcp::SfmPoint> points = SfmPointsOfReference(
+          config.dataset.path, dataset.reference.name, config.gcp.sfm.projected);
+      sets[index] = gcp::GcpsFromSfmPoints(points, reference, config.dataset.scale, config.gcp.sfm,
+                                           &summary, config.gcp.lidar);
       spdlog::info(
-          "sfm GCPs: {} of the {} model points the reference observes ({} short tracks, {} with "
-          "large errors, {} at small angles, {} sharing a pixel)",
-          summary.num_gcps, summary.num_input, summary.num_short_track, summary.num_large_error,
-          summary.num_small_angle, summary.num_same_pixel);
+          "sfm GCPs: {} of {} model points ({}; {} short tracks, {} with large errors, {} at "
+          "small angles, {} sharing a pixel, {} outside the image, {} failing the visibility "
+          "tests)",
+          summary.num_gcps, summary.num_input,
+          config.gcp.sfm.projected ? "observed or projected" : "observed by the reference",
+          summary.num_short_track, summary.num_large_error, summary.num_small_angle,
+          summary.num_same_pixel, summary.num_outside_image, summary.num_inconsistent);
     } else if (source == "depth_map") {
       const cv::Mat depth = ReadDepthMapSource(config.gcp.depth_map, dataset, config.dataset.scale);
       sets[index] =

@@ -144,6 +144,10 @@ void PipelineConfig::Register(config::Schema* s) {
          {"sfm: drop model points whose widest triangulation angle with the reference's ray is "
           "smaller (ill-determined depth)",
           "deg"});
+  s->Add("gcp.sfm.projected", &gcp.sfm.projected,
+         {"sfm: also the model points the reference does not observe but that project into it "
+          "and pass the lidar source's visibility tests (gcp.lidar.consistency_radius_px, ...); "
+          "off: a sparse cloud does not hide what lies behind a nearer surface from those tests"});
   s->Add("gcp.sfm.min_error_px", &gcp.sfm.min_error_px, Range::GreaterThan(0.0),
          {"sfm: smallest image error the GCP sigma assumes, sigma = min over the other observers "
           "i of d_i (e / f) / sin(theta_i), e = max(ERROR, this)",

@@ -107,6 +107,56 @@ TEST(SfmGcps, SigmaIsTheTriangulationDepthError) {
   EXPECT_NEAR(best.points[0].sigma, expected, 0.02 * expected);
 }
 
+// gcp.sfm.projected: an unobserved point behind an observed wall fails the LiDAR source's
+// consistency test; one beside the wall is added; off, neither is.
+TEST(SfmGcps, ProjectedPointsPassTheVisibilityTests) {
+  const Eigen::Vector3d left(-1, 0, 0), right(1, 0, 0);
+  auto at = [](double col, double row, double z) {
+    return Eigen::Vector3d((col - 99.5) / 100 * z, (row - 49.5) / 100 * z, z);
+  };
+  std::vector<SfmPoint> points;
+  for (int row = 30; row <= 70; row += 2) {
+    for (int col = 80; col <= 120; col += 2) {
+      points.push_back(Point(at(col, row, 5.0), 3, 0.5, {left, right}));
+    }
+  }
+  const size_t wall = points.size();
+  SfmPoint behind = Point(at(101, 51, 8.0), 3, 0.5, {left, right});
+  behind.observed = false;
+  SfmPoint beside = Point(at(20, 20, 8.0), 3, 0.5, {left, right});
+  beside.observed = false;
+  points.push_back(behind);
+  points.push_back(beside);
+
+  GcpSourceSummary summary;
+  const GcpSet observed_only = GcpsFromSfmPoints(points, Reference(), 1.0, {}, &summary);
+  EXPECT_EQ(observed_only.size(), wall);
+  EXPECT_EQ(summary.num_input, static_cast<int>(wall));
+
+  SfmGcpOptions o;
+  o.projected = true;
+  const GcpSet gcps = GcpsFromSfmPoints(points, Reference(), 1.0, o, &summary);
+  ASSERT_EQ(gcps.size(), wall + 1);
+  EXPECT_EQ(summary.num_input, static_cast<int>(wall + 2));
+  EXPECT_EQ(summary.num_inconsistent, 1);
+  EXPECT_EQ(summary.num_same_pixel, 0);
+  bool found_beside = false;
+  for (const Gcp& g : gcps.points) {
+    EXPECT_FALSE(g.col == 101 && g.row == 51) << "the point behind the wall";
+    if (g.col == 20 && g.row == 20) {
+      found_beside = true;
+      EXPECT_NEAR(g.depth, 8.0, 1e-9);
+      EXPECT_GT(g.sigma, 0.0);
+    }
+  }
+  EXPECT_TRUE(found_beside);
+
+  // It is the consistency test that hides the point behind the wall (z-buffer only: it passes).
+  LidarGcpOptions zbuffer_only;
+  zbuffer_only.consistency_radius_px = 0;
+  EXPECT_EQ(GcpsFromSfmPoints(points, Reference(), 1.0, o, nullptr, zbuffer_only).size(), wall + 2);
+}
+
 TEST(SfmGcps, BadOptionsNameTheKey) {
   auto error = [](SfmGcpOptions o) -> std::string {
     try {

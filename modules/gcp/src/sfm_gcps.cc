@@ -36,22 +36,27 @@ void SfmGcpOptions::Check() const {
 
 GcpSet GcpsFromSfmPoints(const std::vector<SfmPoint>& points, const Camera& reference,
                          double image_scale, const SfmGcpOptions& options,
-                         GcpSourceSummary* summary) {
+                         GcpSourceSummary* summary, const LidarGcpOptions& lidar) {
   reference.Validate("GcpsFromSfmPoints: reference camera");
   options.Check();
   if (!(image_scale > 0.0)) throw Error("GcpsFromSfmPoints: image_scale must be > 0");
   GcpSourceSummary local;
   local.source = GcpSourceName(GcpSource::kSfm);
-  local.num_input = static_cast<int>(points.size());
+  int unobserved_kept = 0;  // unobserved points past the filters (options.projected)
   const int width = reference.width, height = reference.height;
   const double f_model = reference.K(0, 0) / image_scale;
   const double min_angle_rad = options.min_angle_deg * kPi / 180.0;
 
-  // Per pixel: the index of the nearest kept point (−1: none).
+  // Per pixel: the index of the nearest kept observed point (−1: none), and of the nearest kept
+  // point of either kind (options.projected).
   std::vector<int> winner(static_cast<size_t>(width) * height, -1);
+  std::vector<int> any_winner(options.projected ? winner.size() : 0, -1);
   std::vector<Gcp> candidate(points.size());
+  PointCloud filtered;  // options.projected: every point past the filters, for the visibility
   for (size_t i = 0; i < points.size(); ++i) {
     const SfmPoint& p = points[i];
+    if (!p.observed && !options.projected) continue;
+    ++local.num_input;
     if (!p.point_world.allFinite() || !std::isfinite(p.error_px)) {
       ++local.num_invalid;
       continue;
@@ -99,13 +104,52 @@ GcpSet GcpsFromSfmPoints(const std::vector<SfmPoint>& points, const Camera& refe
     g.depth = depth;
     g.sigma = sigma;
     g.source = GcpSource::kSfm;
-    int& w = winner[static_cast<size_t>(g.row) * width + g.col];
+    const size_t pixel_index = static_cast<size_t>(g.row) * width + g.col;
+    if (options.projected) {
+      filtered.points.push_back(p.point_world.cast<float>());
+      filtered.sigma.push_back(static_cast<float>(sigma));
+      int& a = any_winner[pixel_index];
+      if (a < 0 || depth < candidate[a].depth) a = static_cast<int>(i);
+    }
+    if (!p.observed) {
+      ++unobserved_kept;
+      continue;
+    }
+    int& w = winner[pixel_index];
     if (w < 0) {
       w = static_cast<int>(i);
     } else {
       ++local.num_same_pixel;
       if (depth < candidate[w].depth) w = static_cast<int>(i);
     }
+  }
+  if (options.projected && !filtered.empty()) {
+    // The LiDAR source's visibility over all the filtered points; its GCP on a pixel whose
+    // nearest point is unobserved (and no observed GCP) adds that point.
+    const GcpSet visible =
+        GcpsFromPointCloud(filtered, Eigen::Matrix4d::Identity(), reference, lidar);
+    std::vector<char> passed(winner.size(), 0);
+    for (const Gcp& g : visible.points) {
+      const size_t k = static_cast<size_t>(g.row) * width + g.col;
+      const int a = any_winner[k];
+      if (a >= 0 && !points[a].observed && winner[k] < 0 &&
+          std::abs(g.depth - candidate[a].depth) <= 1e-4 * candidate[a].depth) {
+        passed[k] = 1;
+      }
+    }
+    int added = 0;
+    for (size_t k = 0; k < winner.size(); ++k) {
+      const int a = any_winner[k];
+      if (a < 0 || points[a].observed || winner[k] >= 0) continue;
+      if (passed[k]) {
+        winner[k] = a;
+        ++added;
+      } else {
+        ++local.num_inconsistent;
+      }
+    }
+    // The other unobserved points lost their pixel to a nearer point or an observed GCP.
+    local.num_same_pixel += unobserved_kept - added - local.num_inconsistent;
   }
   GcpSet out;
   for (const int w : winner) {

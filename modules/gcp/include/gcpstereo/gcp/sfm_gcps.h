@@ -29,6 +29,11 @@ struct SfmGcpOptions {
   // Smallest image error σ assumes, pixels of the model's images (a mean reprojection error of a
   // few hundredths of a pixel does not make a depth exact). Valid: > 0. Key gcp.sfm.min_error_px.
   double min_error_px = 0.5;
+  // Also the points that the reference does not observe but that project into it and pass the
+  // LiDAR source's visibility tests (z-buffer and depth consistency with gcp.lidar.*, over all
+  // the model's points). Off by default: an SfM cloud is sparse, so a nearer surface between its
+  // points does not hide what lies behind it from those tests. Key gcp.sfm.projected.
+  bool projected = false;
 
   void Check() const;  // throws ConfigError naming the key
 };
@@ -38,6 +43,7 @@ struct SfmPoint {
   Eigen::Vector3d point_world = Eigen::Vector3d::Zero();
   double error_px = 0.0;  // mean reprojection error in the model's images (COLMAP's ERROR)
   int track_length = 0;   // images observing it, the reference included
+  bool observed = true;   // the reference observes it (false: only projected, options.projected)
   // Centres of the other images of its track (world frame), for the triangulation angle.
   std::vector<Eigen::Vector3d> other_centers_world;
 };
@@ -52,8 +58,13 @@ struct SfmPoint {
 // (≈ z · e / (f · tan θ) for small angles), f_model = reference.K(0,0) / image_scale the focal
 // length of the model's images (image_scale: dataset.scale; the errors are in the model's
 // pixels). The angle filter takes the widest min(θ_i, 180° − θ_i). Source kSfm, raster order.
+// Points with observed = false are skipped unless options.projected; then every point that passes
+// the filters goes through GcpsFromPointCloud(…, lidar) (observed ones as occluders), and an
+// unobserved point that wins its pixel there, on a pixel without an observed GCP, is a GCP too
+// (summary: num_inconsistent counts the unobserved points the visibility tests reject).
 GcpSet GcpsFromSfmPoints(const std::vector<SfmPoint>& points, const Camera& reference,
                          double image_scale, const SfmGcpOptions& options,
-                         GcpSourceSummary* summary = nullptr);
+                         GcpSourceSummary* summary = nullptr,
+                         const LidarGcpOptions& lidar = LidarGcpOptions());
 
 }  // namespace gcpstereo::gcp
