@@ -23,6 +23,7 @@
 #include "gcpstereo/io/pfm.h"
 #include "gcpstereo/io/point_cloud_io.h"
 #include "gcpstereo/pipeline/run.h"
+#include "gcpstereo/pipeline/scene.h"
 #include "gcpstereo/synth/generator.h"
 #include "gcpstereo/synth/writer.h"
 #include "test_data.h"
@@ -41,15 +42,16 @@ std::string ReadFile(const std::string& path) {
 // Writes <strecha>'s views as a COLMAP workspace in <out>: images/ copied, sparse/ as text. Each
 // camera K becomes PINHOLE with COLMAP's +0.5 pixel-centre shift; the pose world-to-camera
 // (q = R^T as a quaternion, t = -R^T C). Every `step`-th laser point is a 3D point with a
-// keypoint in each view that sees it.
-void WriteColmapWorkspace(const std::string& strecha, const std::string& out, int step) {
+// keypoint in each view that sees it. Image names are <folder><name>.png (folder "" or "x/").
+void WriteColmapWorkspace(const std::string& strecha, const std::string& out, int step,
+                          const std::string& folder = "") {
   const std::vector<std::string> names = io::ListDatasetViews("strecha", strecha);
-  fs::create_directories(out + "/images");
+  fs::create_directories(out + "/images/" + folder);
   fs::create_directories(out + "/sparse");
   std::vector<Camera> cameras;
   for (const std::string& name : names) {
     const std::string file = name + ".png";
-    fs::copy_file(strecha + "/images/" + file, out + "/images/" + file,
+    fs::copy_file(strecha + "/images/" + file, out + "/images/" + folder + file,
                   fs::copy_options::overwrite_existing);
     cameras.push_back(io::ReadStrechaCamera(strecha + "/cameras/" + file + ".camera"));
   }
@@ -87,7 +89,7 @@ void WriteColmapWorkspace(const std::string& strecha, const std::string& out, in
     const Eigen::Quaterniond q(R);
     const Eigen::Vector3d t = -R * c.center_world;
     image_file << v + 1 << ' ' << q.w() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' '
-               << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << v + 1 << ' ' << names[v]
+               << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << v + 1 << ' ' << folder << names[v]
                << ".png\n"
                << keypoints[v].str() << '\n';
   }
@@ -227,6 +229,25 @@ TEST_F(ColmapSceneRun, SfmGcpsLieOnTheSurfaceAndCombineWithLidar) {
   }
   EXPECT_GT(both["gcps"]["count"].get<int>(), sfm["gcps"]["count"].get<int>());
   EXPECT_LE(both["gcps"]["count"].get<int>(), sum);
+}
+
+// Image names with a sub-folder: views/<folder>/<name>/ in the scene, and `fuse` of those folders
+// gives the scene's model.
+TEST_F(ColmapSceneRun, ImageNamesWithSubFolders) {
+  WriteColmapWorkspace(*dir_ + "/strecha", *dir_ + "/colmap_sub", 7, "cams/");
+  Run("colmap", "sub_scene",
+      {"dataset.path=" + *dir_ + "/colmap_sub",
+       "dataset.reference=[cams/0004.png, cams/0005.png, cams/0006.png]"});
+  for (const char* name : {"0004.png", "0005.png", "0006.png"}) {
+    EXPECT_TRUE(fs::exists(*dir_ + "/sub_scene/views/cams/" + name + "/depth.pfm")) << name;
+  }
+  FuseRequest request;
+  for (const char* name : {"0004.png", "0005.png", "0006.png"}) {
+    request.view_dirs.push_back(*dir_ + "/sub_scene/views/cams/" + name);
+  }
+  request.output_dir = *dir_ + "/sub_fused";
+  FuseViewFolders(request);
+  EXPECT_EQ(ReadFile(*dir_ + "/sub_fused/fused.ply"), ReadFile(*dir_ + "/sub_scene/fused.ply"));
 }
 
 TEST(ColmapSfmConfig, SfmNeedsAColmapModel) {
