@@ -13,9 +13,10 @@
 #
 # As root (the daemons' SlurmUser). slurmd runs at the niceness this script is started with, and
 # its jobs inherit it (PropagatePrioProcess=0): `nice -n 19 tools/slurm_local.sh start` keeps them
-# in the background of a machine doing other work. No accounting database: sacct is not
-# available; `squeue`, `scontrol show job ID` (jobs stay listed MinJobAge = 1 h after they end) and
-# slurmctld.log show the jobs.
+# in the background of a machine doing other work. With slurmdbd and mariadb-server installed it
+# also starts a MariaDB server (TCP 127.0.0.1:3307, data in STATE_DIR) and slurmdbd, so that
+# `sacct` lists the jobs; without them there is no accounting and `squeue`, `scontrol show job`
+# (jobs stay listed MinJobAge = 1 h after they end) and slurmctld.log show the jobs.
 set -euo pipefail
 
 command=${1:-}
@@ -24,7 +25,7 @@ state=${2:-/tmp/gcpstereo-slurm}
 die() { echo "slurm_local: $*" >&2; exit 1; }
 
 stop() {
-  for daemon in slurmd slurmctld munged; do
+  for daemon in slurmd slurmctld slurmdbd mariadbd munged; do
     local pidfile="$state/run/$daemon.pid"
     if [ -f "$pidfile" ]; then
       local pid
@@ -37,6 +38,50 @@ stop() {
     fi
   done
   echo "slurm_local: stopped ($state)"
+}
+
+# MariaDB (its own data folder and port) and slurmdbd on it; slurmdbd reads slurmdbd.conf beside
+# slurm.conf ($SLURM_CONF).
+start_accounting() {
+  local password=gcpstereo-local
+  if [ ! -d "$state/db/mysql" ]; then
+    mariadb-install-db --user=root --datadir="$state/db" --auth-root-authentication-method=normal \
+      --skip-test-db > "$state/log/mariadb-install.log" 2>&1 ||
+      die "mariadb-install-db failed (see $state/log/mariadb-install.log)"
+  fi
+  mariadbd --user=root --datadir="$state/db" --socket="$state/run/mariadb.sock" \
+    --pid-file="$state/run/mariadbd.pid" --port=3307 --bind-address=127.0.0.1 \
+    --log-error="$state/log/mariadb.log" < /dev/null > /dev/null 2>&1 &
+  for _ in $(seq 100); do
+    mariadb --socket="$state/run/mariadb.sock" -u root -e 'SELECT 1' >/dev/null 2>&1 && break
+    sleep 0.2
+  done
+  mariadb --socket="$state/run/mariadb.sock" -u root -e "
+    CREATE USER IF NOT EXISTS 'slurm'@'127.0.0.1' IDENTIFIED BY '$password';
+    GRANT ALL ON slurm_acct_db.* TO 'slurm'@'127.0.0.1';" ||
+    die "MariaDB did not start (see $state/log/mariadb.log)"
+  cat > "$state/slurmdbd.conf" <<EOF
+AuthType=auth/munge
+AuthInfo=socket=$state/munge/munge.socket
+DbdHost=localhost
+DbdPort=6819
+SlurmUser=root
+StorageType=accounting_storage/mysql
+StorageHost=127.0.0.1
+StoragePort=3307
+StorageUser=slurm
+StoragePass=$password
+StorageLoc=slurm_acct_db
+PidFile=$state/run/slurmdbd.pid
+LogFile=$state/log/slurmdbd.log
+EOF
+  chmod 600 "$state/slurmdbd.conf"
+  SLURM_CONF="$state/slurm.conf" slurmdbd
+  for _ in $(seq 100); do
+    (echo > /dev/tcp/127.0.0.1/6819) 2>/dev/null && return 0
+    sleep 0.2
+  done
+  die "slurmdbd did not start (see $state/log/slurmdbd.log)"
 }
 
 start() {
@@ -64,6 +109,15 @@ start() {
     --pid-file="$state/run/munged.pid" --log-file="$state/log/munged.log" \
     --seed-file="$state/munge/munge.seed"
 
+  local accounting="AccountingStorageType=accounting_storage/none"
+  if command -v slurmdbd >/dev/null && command -v mariadbd >/dev/null; then
+    start_accounting
+    accounting="AccountingStorageType=accounting_storage/slurmdbd
+AccountingStorageHost=localhost
+AccountingStoragePort=6819
+AccountingStoragePass=$state/munge/munge.socket"
+  fi
+
   cat > "$state/slurm.conf" <<EOF
 # Written by tools/slurm_local.sh: one node, this machine.
 ClusterName=gcpstereo-local
@@ -87,7 +141,7 @@ MpiDefault=none
 SelectType=select/cons_tres
 SelectTypeParameters=CR_CPU_Memory
 JobAcctGatherType=jobacct_gather/linux
-AccountingStorageType=accounting_storage/none
+$accounting
 JobCompType=jobcomp/none
 PropagatePrioProcess=0
 ReturnToService=2

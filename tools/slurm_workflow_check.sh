@@ -3,7 +3,8 @@
 # synthetic preset: starts a single-node cluster (tools/slurm_local.sh), runs both, checks that
 # every view's depth map and the fused model are the same bytes, lists the Slurm jobs, and stops
 # the cluster. Apart from the test command (it needs root and the Slurm packages:
-# apt-get install slurmctld slurmd slurm-client munge). Run it as
+# apt-get install slurmctld slurmd slurm-client munge, and for sacct slurmdbd mariadb-server).
+# Run it as
 #   nice -n 19 tools/slurm_workflow_check.sh [BUILD_DIR]      (default build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -49,6 +50,11 @@ for file in fused.ply mesh.ply mesh.obj effective_config.yaml $(cd local && ls v
   if ! cmp -s "local/$file" "slurm/$file"; then echo "DIFFERENT: $file"; status=1; fi
 done
 echo "workflow with --cores 2: $local_s s; through Slurm: $slurm_s s"
+if grep -q accounting_storage/slurmdbd "$SLURM_CONF"; then
+  sleep 2  # slurmctld sends the last job's end to slurmdbd
+  echo "Slurm jobs (sacct):"
+  sacct -a -S now-1hour --format=JobID,JobName%20,State,AllocCPUS,ReqMem,MaxRSS,Elapsed,Start,End
+else
 echo "Slurm jobs (no accounting database, so scontrol rather than sacct):"
 scontrol show job -o | python3 -c "$(cat <<'PY'
 import re, sys
@@ -60,5 +66,6 @@ for r in rows:
     print("  ".join(v.ljust(w) for v, w in zip(r, widths)))
 PY
 )"
+fi
 [ $status -eq 0 ] && echo "slurm_workflow_check: the Slurm run's views and model are the local run's bytes"
 exit $status
