@@ -50,11 +50,10 @@ int Views(const ViewsArgs& args) {
                      {"overrides", job.overrides}});
   }
   // What a job's memory and time scale with (pipeline/workflow/Snakefile): the label count
-  // (null = one per pixel of disparity, known only when the view runs), the neighbours and the
-  // Poisson octree depth of the scene mesh.
+  // (null = one per pixel of disparity, known only when the view runs), the neighbours (null =
+  // every other view of the data set) and the Poisson octree depth of the scene mesh.
   nlohmann::json labels = nullptr;
   if (o.labels.count) labels = *o.labels.count;
-  // (null = every other view of the data set).
   nlohmann::json neighbors = nullptr;
   if (o.dataset.AutoNeighbors()) {
     neighbors = o.dataset.neighbor_selection.count;
