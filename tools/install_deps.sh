@@ -12,6 +12,9 @@ packages=(
   # Optimised multi-threaded BLAS/LAPACK for CHOLMOD and Ceres (otherwise Debian may pick ATLAS
   # or the reference BLAS): CHOLMOD's 1536x1024 propagation solve 10.8 s -> 4.8 s.
   libopenblas0-pthread
+  # The scene as a Snakemake workflow (pipeline/workflow/Snakefile) and its test; gcpstereo itself
+  # does not need it.
+  snakemake
 )
 
 missing=()

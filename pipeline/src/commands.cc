@@ -24,11 +24,47 @@ int Run(const RunArgs& args, bool log_level_from_command_line) {
   pipeline::LoadedConfig config;
   config.Load(args.config_path, args.overrides);
   if (!log_level_from_command_line) SetLogLevel(config.options().runtime.log_level);
+  if (args.fuse_only && !config.options().dataset.IsScene()) {
+    throw ConfigError(
+        "--fuse-only: dataset.reference is one view, not a scene (a list of views or all): there "
+        "is nothing to fuse");
+  }
   const pipeline::RunSummary summary =
-      pipeline::RunPipeline(config, args.output_dir, args.config_path);
+      args.fuse_only ? pipeline::RunScene(config, args.output_dir, {/*compute_views=*/false})
+                     : pipeline::RunPipeline(config, args.output_dir, args.config_path);
   std::printf("%s", summary.terminal_summary.c_str());
   std::printf("gcpstereo run: done in %.1f s, peak memory %.0f MB; outputs in %s\n",
               summary.total_seconds, summary.peak_memory_bytes / 1e6, summary.output_dir.c_str());
+  return 0;
+}
+
+int Views(const ViewsArgs& args) {
+  pipeline::LoadedConfig config;
+  config.Load(args.config_path, args.overrides);
+  const pipeline::PipelineConfig& o = config.options();
+  nlohmann::json views = nlohmann::json::array();
+  for (const pipeline::ViewJob& job : pipeline::PlanViewJobs(config)) {
+    views.push_back({{"name", job.name},
+                     {"width_px", job.width_px},
+                     {"height_px", job.height_px},
+                     {"overrides", job.overrides}});
+  }
+  // What a job's memory and time scale with (pipeline/workflow/Snakefile): the label count
+  // (null = one per pixel of disparity, known only when the view runs), the neighbours (null =
+  // every other view of the data set) and the Poisson octree depth of the scene mesh.
+  nlohmann::json labels = nullptr;
+  if (o.labels.count) labels = *o.labels.count;
+  nlohmann::json neighbors = nullptr;
+  if (o.dataset.AutoNeighbors()) {
+    neighbors = o.dataset.neighbor_selection.count;
+  } else if (!o.dataset.neighbors.empty()) {
+    neighbors = o.dataset.neighbors.size();
+  }
+  const nlohmann::json document = {
+      {"scene", o.dataset.IsScene()}, {"labels", labels},
+      {"neighbors", neighbors},       {"scene_mesh_depth", o.scene_mesh.depth},
+      {"threads", o.runtime.threads}, {"views", views}};
+  std::printf("%s\n", document.dump(2).c_str());
   return 0;
 }
 

@@ -19,8 +19,17 @@ struct RunArgs {
   std::string config_path;
   std::string output_dir;
   std::vector<std::string> overrides;
+  bool fuse_only = false;  // a scene run that computes no view (SceneRunOptions::compute_views)
 };
 int Run(const RunArgs& args, bool log_level_from_command_line);
+
+// `gcpstereo views CONFIG [--set]...`: the run's views as jobs of their own (PlanViewJobs), one
+// JSON document on stdout.
+struct ViewsArgs {
+  std::string config_path;
+  std::vector<std::string> overrides;
+};
+int Views(const ViewsArgs& args);
 
 struct FuseArgs {
   std::vector<std::string> view_dirs;

@@ -1,5 +1,5 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
-// The gcpstereo command line (../shared/CONTRACT.md): run, fuse, synth, eval, demo, keys.
+// The gcpstereo command line (../shared/CONTRACT.md): run, fuse, views, synth, eval, demo, keys.
 #include <unistd.h>
 
 #include <algorithm>
@@ -65,10 +65,25 @@ int main(int argc, char** argv) {
   run->add_option("--set", run_args.overrides,
                   "override one dotted key, KEY=VALUE with VALUE parsed as YAML "
                   "(e.g. --set dataset.neighbors=[im1,im3]); repeatable");
+  run->add_flag("--fuse-only", run_args.fuse_only,
+                "scene runs: compute no view; fuse the complete folders under OUTDIR/views/ "
+                "(computed apart, e.g. by pipeline/workflow/Snakefile) and report the others as "
+                "failed");
   run->footer(
       "Every configuration key, with its default, range and unit: gcpstereo keys\n"
       "Outputs: depth.pfm, disparity.pfm (rectified data), gcps.ply, mesh.ply, mesh.obj, "
       "report.json,\neffective_config.yaml, *.png previews, index.html and run.log.");
+
+  gcpstereo::cli::ViewsArgs views_args;
+  CLI::App* views = app.add_subcommand(
+      "views",
+      "print, as JSON, the views a run's configuration stands for, each with its image size and "
+      "the --set overrides that run it alone (one job per view: pipeline/workflow/Snakefile)");
+  views->add_option("config", views_args.config_path, "configuration file (YAML); see configs/")
+      ->required()
+      ->check(CLI::ExistingFile);
+  views->add_option("--set", views_args.overrides,
+                    "override one dotted key, KEY=VALUE, as for run; repeatable");
 
   gcpstereo::cli::FuseArgs fuse_args;
   CLI::App* fuse = app.add_subcommand(
@@ -149,6 +164,12 @@ int main(int argc, char** argv) {
     gcpstereo::SetLogLevel(!log_level.empty() ? log_level : (quiet ? "warn" : "info"));
     if (run->parsed()) return gcpstereo::cli::Run(run_args, !log_level.empty() || quiet);
     if (fuse->parsed()) return gcpstereo::cli::Fuse(fuse_args);
+    if (views->parsed()) {
+      // stdout carries the JSON alone: info messages and progress bars off.
+      gcpstereo::SetProgressBarsEnabled(false);
+      if (log_level.empty()) gcpstereo::SetLogLevel("warn");
+      return gcpstereo::cli::Views(views_args);
+    }
     if (synth->parsed()) return gcpstereo::cli::Synth(synth_args);
     if (demo->parsed()) return gcpstereo::cli::Demo(demo_args);
     if (keys->parsed()) return gcpstereo::cli::Keys();

@@ -153,24 +153,32 @@ NeighborChoice ChooseNeighbors(const SceneCameras& scene, const std::string& ref
   return choice;
 }
 
-// The per-view configuration: the scene's with this reference and its neighbours.
-std::unique_ptr<LoadedConfig> ViewConfig(const LoadedConfig& scene_config, const std::string& name,
-                                         const SceneCameras* cameras,
-                                         const std::vector<Eigen::Vector3d>& points) {
-  const PipelineConfig& o = scene_config.options();
+// The overrides that make the scene's configuration this view's, but for neighbours chosen
+// automatically (ViewConfig adds those).
+std::vector<std::string> ViewOverrides(const PipelineConfig& o, const std::string& name) {
   std::vector<std::string> overrides = {"dataset.reference=" + Quoted(name)};
-  json selection;
-  if (o.dataset.AutoNeighbors()) {
-    NeighborChoice choice = ChooseNeighbors(*cameras, name, points, o.dataset.neighbor_selection);
-    overrides.push_back("dataset.neighbors=" + FlowList(choice.names));
-    selection = std::move(choice.report);
-  } else if (!o.dataset.neighbors.empty()) {
+  if (!o.dataset.AutoNeighbors() && !o.dataset.neighbors.empty()) {
     // An explicit list serves every reference: each uses the others of the list.
     std::vector<std::string> others;
     for (const std::string& n : o.dataset.neighbors) {
       if (n != name) others.push_back(n);
     }
     overrides.push_back("dataset.neighbors=" + FlowList(others));
+  }
+  return overrides;
+}
+
+// The per-view configuration: the scene's with this reference and its neighbours.
+std::unique_ptr<LoadedConfig> ViewConfig(const LoadedConfig& scene_config, const std::string& name,
+                                         const SceneCameras* cameras,
+                                         const std::vector<Eigen::Vector3d>& points) {
+  const PipelineConfig& o = scene_config.options();
+  std::vector<std::string> overrides = ViewOverrides(o, name);
+  json selection;
+  if (o.dataset.AutoNeighbors()) {
+    NeighborChoice choice = ChooseNeighbors(*cameras, name, points, o.dataset.neighbor_selection);
+    overrides.push_back("dataset.neighbors=" + FlowList(choice.names));
+    selection = std::move(choice.report);
   }
   std::unique_ptr<LoadedConfig> config = scene_config.WithOverrides(overrides);
   config->set_neighbor_selection(std::move(selection));
@@ -186,6 +194,24 @@ bool ViewFolderComplete(const fs::path& dir, const std::string& effective_yaml) 
     return false;
   }
   return ReadText(dir / "effective_config.yaml") == effective_yaml;
+}
+
+// Why a view folder a scene run did not compute is not complete: the error its own run.log ends
+// on (RunPipeline logs "run failed: ..."), if it has one.
+std::string MissingViewError(const fs::path& dir) {
+  std::string error =
+      "not computed by this run (--fuse-only) and no complete folder with this "
+      "configuration in " +
+      dir.string();
+  std::ifstream log(dir / "run.log");
+  std::string line, last_failure;
+  const std::string marker = "run failed: ";
+  while (std::getline(log, line)) {
+    const size_t at = line.find(marker);
+    if (at != std::string::npos) last_failure = line.substr(at + marker.size());
+  }
+  if (!last_failure.empty()) error += "; its run.log: " + last_failure;
+  return error;
 }
 
 // ---- Fusion, meshing, evaluation
@@ -747,7 +773,31 @@ std::unique_ptr<LoadedConfig> ConfigWithChosenNeighbors(const LoadedConfig& conf
   return ViewConfig(config, o.dataset.reference, &cameras, SelectionPoints(o));
 }
 
-RunSummary RunScene(const LoadedConfig& config, const std::string& output_dir) {
+std::vector<ViewJob> PlanViewJobs(const LoadedConfig& config) {
+  const PipelineConfig& o = config.options();
+  std::vector<ViewJob> jobs;
+  const std::vector<std::string> names =
+      o.dataset.IsScene() ? SceneReferenceNames(o) : std::vector<std::string>{o.dataset.reference};
+  for (const std::string& name : names) {
+    io::DatasetRequest request;
+    request.format = o.dataset.format;
+    request.path = o.dataset.path;
+    request.reference = name;
+    request.scale = o.dataset.scale;
+    request.load_neighbors = false;
+    const Camera camera = io::LoadDataset(request).reference.camera;
+    ViewJob job;
+    job.name = name;
+    job.width_px = camera.width;
+    job.height_px = camera.height;
+    if (o.dataset.IsScene()) job.overrides = ViewOverrides(o, name);
+    jobs.push_back(std::move(job));
+  }
+  return jobs;
+}
+
+RunSummary RunScene(const LoadedConfig& config, const std::string& output_dir,
+                    const SceneRunOptions& options) {
   const PipelineConfig& o = config.options();
   Timer total;
   OutputFolder out(output_dir);
@@ -785,6 +835,8 @@ RunSummary RunScene(const LoadedConfig& config, const std::string& output_dir) {
         spdlog::info("scene: view {} is complete in {}: reused", name, dir);
         views.push_back(internal::ViewSummary(name, dir, "reused"));
         ++reused;
+      } else if (!options.compute_views) {
+        throw Error(MissingViewError(dir));
       } else {
         RunPipeline(*view_config, dir, config.path());
         views.push_back(internal::ViewSummary(name, dir, "done"));

@@ -50,7 +50,7 @@ std::string WriteFile(const fs::path& path, const std::string& text) {
 TEST(Cli, HelpListsTheCommands) {
   const Result r = RunCli("--help", true);
   EXPECT_EQ(r.status, 0);
-  for (const char* command : {"run", "fuse", "synth", "eval", "demo"}) {
+  for (const char* command : {"run", "fuse", "views", "synth", "eval", "demo"}) {
     EXPECT_NE(r.output.find(command), std::string::npos) << command << " missing in:\n" << r.output;
   }
 }
@@ -231,6 +231,35 @@ TEST(Cli, FuseOfAFolderThatIsNoViewIsOneLineNamingTheFile) {
             "gcpstereo: error: " + (dir / "not_a_view" / "effective_config.yaml").string() +
                 ": not found: the folder is not a finished per-view run of gcpstereo\n");
   EXPECT_FALSE(fs::exists(dir / "out" / "fused.ply"));
+}
+
+// `views` prints the jobs of a scene as JSON on stdout alone (the workflow parses it), and
+// `run --fuse-only` of a single reference is refused in one line.
+TEST(Cli, ViewsPrintsTheSceneAsJsonAndFuseOnlyNeedsAScene) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli-views");
+  const fs::path data = dir / "data";
+  ASSERT_EQ(RunCli("synth --preset tiny -q -o " + data.string()).status, 0);
+  const std::string config =
+      WriteFile(dir / "c.yaml", "dataset:\n  format: strecha\n  path: " + data.string() +
+                                    "\n  reference: all\nlabels:\n  count: 32\n");
+  const Result views = RunCli("views " + config + " --set 'dataset.reference=[\"0004\", \"0006\"]'",
+                              /*with_stdout=*/true);
+  EXPECT_EQ(views.status, 0) << views.output;
+  ASSERT_FALSE(views.output.empty());
+  EXPECT_EQ(views.output.front(), '{') << views.output;
+  for (const char* expected :
+       {"\"scene\": true", "\"labels\": 32", "\"name\": \"0004\"", "\"name\": \"0006\"",
+        "\"width_px\": 160", "\"dataset.reference=\\\"0006\\\"\""}) {
+    EXPECT_NE(views.output.find(expected), std::string::npos) << expected << " in\n"
+                                                              << views.output;
+  }
+  EXPECT_EQ(views.output.find("\"name\": \"0005\""), std::string::npos) << views.output;
+  const Result single = RunCli("run " + config + " -o " + (dir / "out").string() +
+                               " --set dataset.reference=0005 --fuse-only");
+  EXPECT_NE(single.status, 0);
+  EXPECT_EQ(single.output,
+            "gcpstereo: error: --fuse-only: dataset.reference is one view, not a scene (a list of "
+            "views or all): there is nothing to fuse\n");
 }
 
 }  // namespace

@@ -208,6 +208,58 @@ TEST_F(TinySceneRun, FuseRefusesFoldersOfDifferentScenesOrCameras) {
   EXPECT_EQ(ReadFile(*dir_ + "/fused_mixed/mesh.ply"), ReadFile(*dir_ + "/fuse_a/mesh.ply"));
 }
 
+// A view run alone with PlanViewJobs' overrides is the scene's view: the scene run with
+// compute_views = false (`run --fuse-only`, the workflow's fusion job) reuses it, computes no
+// other view and reports the missing one as failed, with the error its run.log ends on.
+TEST_F(TinySceneRun, ViewJobsRunAloneAreReusedByAFuseOnlyScene) {
+  const std::string out = *dir_ + "/jobs";
+  // An explicit neighbour list: each view uses the others of the list.
+  std::vector<std::string> scene_overrides = Overrides();
+  scene_overrides.push_back("dataset.reference=[\"0004\", \"0005\", \"0006\"]");
+  scene_overrides.push_back("dataset.neighbors=[\"0004\", \"0005\", \"0006\", \"0007\"]");
+  LoadedConfig scene;
+  scene.Load("", scene_overrides);
+  const std::vector<ViewJob> jobs = PlanViewJobs(scene);
+  ASSERT_EQ(jobs.size(), 3u);
+  EXPECT_EQ(jobs[1].name, "0005");
+  EXPECT_EQ(jobs[1].width_px, 160);
+  EXPECT_EQ(jobs[1].height_px, 107);
+  EXPECT_EQ(jobs[1].overrides,
+            (std::vector<std::string>{"dataset.reference=\"0005\"",
+                                      "dataset.neighbors=[\"0004\", \"0006\", \"0007\"]"}));
+  for (const ViewJob& job : {jobs[0], jobs[1]}) {
+    std::vector<std::string> overrides = scene_overrides;
+    overrides.insert(overrides.end(), job.overrides.begin(), job.overrides.end());
+    LoadedConfig view;
+    view.Load("", overrides);
+    RunPipeline(view, out + "/views/" + job.name, "(test)");
+  }
+  // View 0006 failed in its own job: its folder holds only its run.log.
+  fs::create_directories(out + "/views/0006");
+  std::ofstream(out + "/views/0006/run.log") << "[00:00:00] run failed: out of memory\n";
+  const json report =
+      json::parse(gcpstereo::pipeline::RunScene(scene, out, {/*compute_views=*/false}).report_json);
+  EXPECT_EQ(ViewStatus(report, "0004")["status"], "reused");
+  EXPECT_EQ(ViewStatus(report, "0005")["status"], "reused");
+  const json failed = ViewStatus(report, "0006");
+  EXPECT_EQ(failed["status"], "failed");
+  EXPECT_NE(failed["error"].get<std::string>().find("--fuse-only"), std::string::npos);
+  EXPECT_NE(failed["error"].get<std::string>().find("its run.log: out of memory"),
+            std::string::npos)
+      << failed.dump();
+  EXPECT_FALSE(fs::exists(out + "/views/0006/depth.pfm"));
+  EXPECT_EQ(report["fused_views"], 2);
+  // A single reference is one job, the run as configured.
+  LoadedConfig single;
+  std::vector<std::string> one = Overrides();
+  one.push_back("dataset.reference=\"0005\"");
+  single.Load("", one);
+  const std::vector<ViewJob> single_jobs = PlanViewJobs(single);
+  ASSERT_EQ(single_jobs.size(), 1u);
+  EXPECT_EQ(single_jobs[0].name, "0005");
+  EXPECT_TRUE(single_jobs[0].overrides.empty());
+}
+
 TEST_F(TinySceneRun, AutomaticNeighboursAreRecorded) {
   const json report = RunScene("auto", {"dataset.reference=[\"0005\", \"0006\"]",
                                         "dataset.neighbors=auto", "dataset.neighbor_count=2"});
