@@ -26,6 +26,18 @@ Suites
             eval.lidar_holdout=true); per-stage times, total, peak memory, main metrics; and OpenCV
             SGBM (build/tools/benchmarks/gcpstereo_sgbm_baseline) on the rectified pairs, scored
             with gcpstereo eval (Middlebury) or on the same held-out LiDAR points (KITTI).
+  scene     whole scenes (every view's depth map, fused and meshed; README "Whole scenes"):
+            - the synthetic fountain, all 11 views, neighbours chosen automatically, at the
+              paper's per-view setting (configs/synthetic_fountain.yaml): D+GCP (laser, s = 16),
+              D without GCPs (gcp.sources=[]) and D^ alone (runtime.stop_after=propagation,
+              fusion.input=propagated); F-score / accuracy / completeness at 1, 2, 5, 10 cm of
+              the mesh and of the fused points against gt/mesh.ply and gt/laser.ply, the mean
+              within-3-sigma share over the views, whole-scene time and peak memory; then
+              `gcpstereo fuse` of the D+GCP views alone (the time and memory of fusion, meshing
+              and evaluation without the views);
+            - fountain-P11, all 11 views with image-match GCPs (configs/fountain_p11.yaml):
+              time, memory, pictures (no ground truth here).
+            Not part of 'all' (about 75 minutes on 2 cores): ask for it with --suite scene.
 
 Scenes run one after the other (the machine may be shared). A failing scene never stops a suite:
 its error is recorded in the table and the JSON. Run folders stay under OUT/runs/ for inspection;
@@ -34,6 +46,7 @@ its error is recorded in the table and the JSON. Run folders stay under OUT/runs
 Example (from the repository root, data in ../shared/data):
   tools/benchmark.py --suite costs --build build --out bench-out
   tools/benchmark.py --suite table2 --scenes tsukuba,venus
+  tools/benchmark.py --suite scene --scenes synthetic   # the synthetic fountain scene only
 """
 
 import argparse
@@ -93,7 +106,7 @@ KITTI_FRAMES = ["0000000000", "0000000010", "0000000020", "0000000030", "0000000
 KITTI_MAX_DISPARITY = 127  # configs/kitti_lidar.yaml labels 0..127
 KITTI_LIDAR_MOTION = "registration"  # configs/kitti_lidar.yaml gcp.lidar.motion.mode
 
-SUITES = ["costs", "table2", "endtoend"]
+SUITES = ["costs", "table2", "endtoend", "scene"]
 
 
 class BenchError(Exception):
@@ -332,6 +345,16 @@ class Runner:
         command = [self.sgbm_program] + args + ["-o", os.path.join(folder, "disparity.pfm"),
                                         "--report", os.path.join(folder, "sgbm.json")]
         report = self._execute(key, command, folder, "sgbm.json")
+        with open(report) as f:
+            return json.load(f), folder
+
+    def fuse(self, key, view_dirs, sets=()):
+        """gcpstereo fuse VIEWDIR... -o OUT/runs/KEY --set ...; returns (report dict, folder)."""
+        folder = os.path.join(self.runs, key)
+        command = [self.gcpstereo, "fuse"] + list(view_dirs) + ["-o", folder, "-q"]
+        for item in sets:
+            command += ["--set", item]
+        report = self._execute(key, command, folder, "report.json")
         with open(report) as f:
             return json.load(f), folder
 
@@ -753,6 +776,168 @@ def suite_endtoend(runner, scenes, frames, include_fountain):
     return {"rows": rows, "markdown": "\n".join(md)}
 
 
+SCENE_THRESHOLDS_CM = [1, 2, 5, 10]
+SCENE_ALL_VIEWS = ["dataset.reference=all", "dataset.neighbors=auto"]
+
+
+def scene_summary(report, folder):
+    """The figures of a scene run's (or fuse's) report.json."""
+    stages = report.get("stages", {})
+
+    def seconds(stage):
+        return stages.get(stage, {}).get("seconds")
+    views = report.get("views", [])
+    view_seconds = sorted(v["seconds"] for v in views if v.get("status") == "done"
+                          and v.get("seconds") is not None)
+    out = {"folder": folder,
+           "total_seconds": report.get("total_seconds"),
+           "peak_memory_bytes": report.get("peak_memory_bytes"),
+           "views": len(views),
+           "views_done": sum(v.get("status") == "done" for v in views),
+           "views_reused": sum(v.get("status") == "reused" for v in views),
+           "views_failed": [v.get("name") for v in views if v.get("status") == "failed"],
+           "view_seconds_median": (view_seconds[len(view_seconds) // 2] if view_seconds
+                                   else None),
+           "view_seconds_max": view_seconds[-1] if view_seconds else None,
+           "view_peak_memory_bytes": max([v.get("peak_memory_bytes", 0) for v in views] or [0]),
+           "stages": {name: seconds(name) for name in stages},
+           "fused_points": report.get("fusion", {}).get("points"),
+           "mesh_faces": report.get("scene_mesh", {}).get("faces"),
+           "pictures": sorted(f for f in os.listdir(folder) if f.endswith(".png"))}
+    fusion, mesh = seconds("fusion"), seconds("scene_mesh")
+    if fusion is not None and mesh is not None:
+        out["fusion_and_mesh_seconds"] = fusion + mesh
+    metrics = report.get("metrics", {})
+    for what in ("mesh_vs_gt_mesh", "fused_points_vs_gt_mesh", "mesh_vs_gt_points",
+                 "fused_points_vs_gt_points"):
+        if what not in metrics:
+            continue
+        m = metrics[what]
+        thresholds_cm = [round(t * 100, 3) for t in m["thresholds"]]
+        if thresholds_cm != SCENE_THRESHOLDS_CM:
+            raise BenchError("%s thresholds %s m, expected %s cm" % (what, m["thresholds"],
+                                                                     SCENE_THRESHOLDS_CM))
+        out[what] = {k: m[k] for k in ("f_score_percent", "accuracy_percent",
+                                       "completeness_percent")}
+    if "views_sigma" in metrics:
+        s = metrics["views_sigma"]
+        out["mean_depth_map_within_3_sigma_percent"] = s["mean_depth_map_within_3_sigma_percent"]
+        out["mean_scene_mesh_within_3_sigma_percent"] = s["mean_scene_mesh_within_3_sigma_percent"]
+    return out
+
+
+def suite_scene(runner, include_synthetic, include_fountain):
+    rows = {}
+    if include_synthetic:
+        def synthetic(sets):
+            def run():
+                data = runner.synth("fountain")
+                base = ["dataset.path=" + data,
+                        "gcp.lidar.path=" + os.path.join(data, "gt", "laser.ply")]
+                key = "scene/synthetic-fountain/" + sets[0]
+                report, folder = runner.run(key, "synthetic_fountain.yaml",
+                                            base + SCENE_ALL_VIEWS + sets[1])
+                return scene_summary(report, folder)
+            return run
+        variants = [("D+GCP", ("d_gcp", [])),
+                    ("D^", ("d_hat", ["runtime.stop_after=propagation",
+                                      "fusion.input=propagated"])),
+                    ("D", ("d", ["gcp.sources=[]"]))]
+        for name, sets in variants:
+            measure(rows, "synthetic fountain " + name, synthetic(sets))
+
+        def fuse_only():
+            d_gcp = rows.get("synthetic fountain D+GCP", {})
+            if "folder" not in d_gcp:
+                raise BenchError("no D+GCP scene to fuse")
+            views = os.path.join(d_gcp["folder"], "views")
+            dirs = [os.path.join(views, v) for v in sorted(os.listdir(views))]
+            report, folder = runner.fuse("scene/synthetic-fountain/fuse_d_gcp", dirs)
+            return scene_summary(report, folder)
+        measure(rows, "synthetic fountain D+GCP, gcpstereo fuse", fuse_only)
+
+    if include_fountain:
+        def fountain():
+            path = os.path.join(runner.data, "strecha", "fountain-P11")
+            report, folder = runner.run("scene/fountain-P11", "fountain_p11.yaml",
+                                        ["dataset.path=" + path] + SCENE_ALL_VIEWS)
+            return scene_summary(report, folder)
+        measure(rows, "fountain-P11", fountain)
+
+    def mb(value):
+        return "%.0f" % (value / 1e6) if value else ""
+
+    def seconds(value):
+        return fmt_seconds(value) if value is not None else ""
+
+    def fscores(r, what):
+        m = r.get(what)
+        return " / ".join("%.1f" % f for f in m["f_score_percent"]) if m else ""
+
+    md = ["# scene — whole scenes: every view, fused and meshed", "",
+          "All views of each data set (`dataset.reference=all`, `dataset.neighbors=auto`), one "
+          "after the other in one process; fusion (`fusion.*` defaults), PCL screened Poisson "
+          "(`scene_mesh.*` defaults), scene evaluation against the part of the ground truth at "
+          "least `fusion.min_views` views observe. Synthetic fountain: "
+          "`configs/synthetic_fountain.yaml` (1536×1024, 360 depth labels, 2×2 tiles, laser "
+          "GCPs at s = 16); fountain-P11: `configs/fountain_p11.yaml` (scale 0.5, image-match "
+          "GCPs).", "",
+          "| run | views (done/reused/failed) | whole scene | peak MB | view time median / max | "
+          "fusion + mesh | fused points | mesh faces | within 3σ: depth maps / scene mesh |",
+          "|---|---|---:|---:|---|---:|---:|---:|---|"]
+    for name, r in rows.items():
+        if "error" in r:
+            md.append("| %s | error: %s | | | | | | | |" % (name, r["error"]))
+            continue
+        sigma = ""
+        if r.get("mean_depth_map_within_3_sigma_percent") is not None:
+            sigma = "%.1f %% / %.1f %%" % (r["mean_depth_map_within_3_sigma_percent"],
+                                          r["mean_scene_mesh_within_3_sigma_percent"])
+        md.append("| %s | %d (%d/%d/%d) | %s | %s | %s / %s | %s | %s | %s | %s |" % (
+            name, r["views"], r["views_done"], r["views_reused"], len(r["views_failed"]),
+            seconds(r["total_seconds"]), mb(r["peak_memory_bytes"]),
+            seconds(r["view_seconds_median"]), seconds(r["view_seconds_max"]),
+            seconds(r.get("fusion_and_mesh_seconds")), r.get("fused_points") or "",
+            r.get("mesh_faces") or "", sigma))
+    md += ["", "F-score %% at %s cm (accuracy and completeness in results.json):" %
+           " / ".join(str(t) for t in SCENE_THRESHOLDS_CM), "",
+           "| run | mesh vs gt mesh | points vs gt mesh | mesh vs laser | points vs laser |",
+           "|---|---|---|---|---|"]
+    for name, r in rows.items():
+        if "error" in r or "mesh_vs_gt_mesh" not in r:
+            continue
+        md.append("| %s | %s | %s | %s | %s |" % (
+            name, fscores(r, "mesh_vs_gt_mesh"), fscores(r, "fused_points_vs_gt_mesh"),
+            fscores(r, "mesh_vs_gt_points"), fscores(r, "fused_points_vs_gt_points")))
+
+    targets = []
+    with_gcp, without = rows.get("synthetic fountain D+GCP", {}), rows.get("synthetic fountain D", {})
+    for what in ("mesh_vs_gt_mesh", "fused_points_vs_gt_mesh"):
+        if what in with_gcp and what in without:
+            a, b = with_gcp[what]["f_score_percent"], without[what]["f_score_percent"]
+            beats = all(x > y for x, y in zip(a, b))
+            targets.append("- laser GCPs beat no GCPs at every threshold (%s F-score): %s "
+                           "(%s against %s)" % (what, "met" if beats else "NOT met",
+                                                " / ".join("%.1f" % x for x in a),
+                                                " / ".join("%.1f" % y for y in b)))
+    if "total_seconds" in with_gcp and with_gcp["views_reused"] == 0:
+        t, m = with_gcp["total_seconds"], with_gcp["peak_memory_bytes"]
+        targets.append("- 11-view scene at the paper's setting in ≤ 11 min and ≤ 4 GB: time %s "
+                       "(%s), memory %s MB (%s)" % (
+                           fmt_seconds(t), "met" if t <= 660 else "NOT met", mb(m),
+                           "met" if m <= 4e9 else "NOT met"))
+    if "fusion_and_mesh_seconds" in with_gcp:
+        t = with_gcp["fusion_and_mesh_seconds"]
+        targets.append("- fusion plus meshing ≤ 60 s: %s (%s)" % (
+            fmt_seconds(t), "met" if t <= 60 else "NOT met"))
+    if targets:
+        md += ["", "Targets (issue 20):"] + targets
+    md += ["", "Laser metrics of the D+GCP and D^ runs are not independent: the laser scan is "
+           "their GCP source. Pictures: `model_*.png` and `scene_sigma_histogram.png` in each "
+           "run folder under runs/scene/."]
+    return {"rows": rows, "markdown": "\n".join(md)}
+
+
 def cell(obj, key, fmt="%.2f"):
     if "error" in obj:
         return "error"
@@ -796,7 +981,7 @@ def main(argv=None):
         prog="benchmark.py", description=__doc__.split("\n\n")[0],
         epilog=__doc__[__doc__.index("Suites"):], formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--suite", choices=SUITES + ["all"], default="all",
-                        help="which suite to run (default: all)")
+                        help="which suite to run (default: all, which leaves out scene)")
     parser.add_argument("--data", default=os.path.join("..", "shared", "data"),
                         help="benchmark data folder (default: ../shared/data)")
     parser.add_argument("--build", default="build",
@@ -841,7 +1026,8 @@ def main(argv=None):
     results["environment"] = {"build": runner.build, "data": runner.data,
                               "host": platform.node(), "python": platform.python_version(),
                               "cpus": os.cpu_count(), "command": " ".join(sys.argv)}
-    suites = SUITES if args.suite == "all" else [args.suite]
+    # 'all' leaves out the scene suite (about 75 minutes on 2 cores)
+    suites = [s for s in SUITES if s != "scene"] if args.suite == "all" else [args.suite]
     started = time.monotonic()
     for suite in suites:
         runner.log("suite %s: %d Middlebury scenes, %d KITTI frames" % (suite, len(scenes),
@@ -852,8 +1038,10 @@ def main(argv=None):
             add_cost_errors(result)
         elif suite == "table2":
             result = suite_table2(runner, scenes)
-        else:
+        elif suite == "endtoend":
             result = suite_endtoend(runner, scenes, frames, include_fountain)
+        else:
+            result = suite_scene(runner, include_synthetic, include_fountain)
         result["seconds"] = time.monotonic() - t0
         result["finished"] = datetime.datetime.now().isoformat(timespec="seconds")
         results[suite] = result
