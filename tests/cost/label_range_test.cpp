@@ -8,24 +8,17 @@
 
 #include "gcpstereo/core/error.h"
 #include "synthetic_scene.h"
+#include "test_data.h"
 
 namespace gcpstereo::cost {
 namespace {
+
+using gcpstereo::testing::ErrorOf;
 
 GcpSet Gcps(const std::vector<double>& depths, GcpSource source = GcpSource::kLidar) {
   GcpSet set;
   for (double d : depths) set.points.push_back(Gcp{0, 0, d, 0.0, source});
   return set;
-}
-
-template <typename F>
-std::string ErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
 }
 
 TEST(LabelRange, GcpPercentilesWithMargin) {

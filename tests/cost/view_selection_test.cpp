@@ -23,17 +23,9 @@
 namespace gcpstereo::cost {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using gcpstereo::testing::ErrorOf;
 
-template <typename F>
-std::string ErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
+constexpr double kPi = 3.14159265358979323846;
 
 Camera MakeCamera(const Eigen::Vector3d& center, const Eigen::Matrix3d& world_from_camera) {
   Camera camera;
@@ -176,7 +168,7 @@ TEST(ViewSelection, CheckNamesKeyValueAndBound) {
     modify(options);
     return ErrorOf([&] { options.Check(); });
   };
-  EXPECT_EQ(check([](ViewSelectionOptions&) {}), "no error");
+  EXPECT_EQ(check([](ViewSelectionOptions&) {}), "(no error)");
   EXPECT_EQ(check([](ViewSelectionOptions& o) { o.count = 0; }),
             "dataset.neighbor_count = 0. Violated constraint: 1 <= count <= 64");
   EXPECT_EQ(check([](ViewSelectionOptions& o) { o.count = 65; }),

@@ -33,19 +33,11 @@
 namespace gcpstereo::io {
 namespace {
 
+using gcpstereo::testing::ErrorOf;
+
 namespace fs = std::filesystem;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
-
-template <typename Fn>
-std::string ErrorOf(Fn&& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 // ---- A tiny model, written by the test in both encodings ---------------------------------------
 

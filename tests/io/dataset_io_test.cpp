@@ -23,17 +23,9 @@
 namespace gcpstereo::io {
 namespace {
 
-namespace fs = std::filesystem;
+using gcpstereo::testing::ErrorOf;
 
-template <typename Fn>
-std::string ErrorOf(Fn&& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+namespace fs = std::filesystem;
 
 cv::Mat RandomImage(int rows, int cols, int type, unsigned seed) {
   cv::Mat image(rows, cols, type);

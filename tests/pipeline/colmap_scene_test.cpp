@@ -31,13 +31,10 @@
 namespace gcpstereo::pipeline {
 namespace {
 
+using gcpstereo::testing::ReadFile;
+
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 // Writes <strecha>'s views as a COLMAP workspace in <out>: images/ copied, sparse/ as text. Each
 // camera K becomes PINHOLE with COLMAP's +0.5 pixel-centre shift; the pose world-to-camera

@@ -23,13 +23,10 @@
 namespace gcpstereo::pipeline {
 namespace {
 
+using gcpstereo::testing::ReadFile;
+
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 class TinySceneRun : public ::testing::Test {
  protected:

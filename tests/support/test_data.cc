@@ -3,6 +3,8 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <mutex>
 #include <random>
 #include <vector>
@@ -55,6 +57,11 @@ std::string MakeTempDir(const std::string& prefix) {
     }
   }
   throw std::runtime_error("cannot create a temporary directory");
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 }  // namespace gcpstereo::testing

@@ -2,8 +2,11 @@
 #pragma once
 
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
+
+#include "gcpstereo/core/error.h"
 
 namespace gcpstereo::testing {
 
@@ -16,6 +19,20 @@ std::string SharedDataPath(const std::string& relative);
 
 // A fresh empty temporary directory for one test (removed when the process exits normally).
 std::string MakeTempDir(const std::string& prefix);
+
+// The whole content of a file, bytes as they are ("" when it cannot be read).
+std::string ReadFile(const std::string& path);
+
+// The message of the gcpstereo::Error `fn` throws, or "(no error)" when it throws none.
+template <typename Fn>
+std::string ErrorOf(Fn&& fn) {
+  try {
+    std::forward<Fn>(fn)();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
 
 }  // namespace gcpstereo::testing
 
