@@ -119,6 +119,11 @@ void PipelineConfig::Register(config::Schema* s) {
          {"automatic range from the views' overlap: depths seen by at least this many neighbours"});
   s->Add("labels.auto.max_depth", &label_range.max_depth, Range::GreaterThanOrInfinite(0.0),
          {"automatic range: never beyond this depth (data set unit)", "m"});
+  s->Add("labels.auto.matching_far_percentile", &label_range.matching_far_percentile,
+         Range::HalfOpen(0, 50),
+         {"depth labels without GCPs: when the matched disparities reach 0 (an unbounded far end), "
+          "the far end is taken at this percentile of them (0 = fail instead)",
+          "%"});
 
   // gcp.lidar.* and gcp.stereo.*: the gcp module's options (see gcp_sources.h, stereo_gcps.h).
   s->Add("gcp.lidar.consistency_radius_px", &gcp.lidar.consistency_radius_px, Range::Between(0, 20),

@@ -254,6 +254,46 @@ TEST(LabelRange, RectifiedPairRangeSpansMatchesAndGcps) {
     EXPECT_EQ(summary.source, "matching");
     EXPECT_EQ(s.max(), 50.0);
   }
+  // A small patch at disparity 0 (here about 4 % of the pixels) over a background at 6 px: with
+  // labels.auto.matching_far_percentile above its share, the far end comes from the background;
+  // below it, or at 0, the range stays unbounded.
+  {
+    auto [patch_left, patch_right] = ShiftedPair(320, 6, 40);
+    cv::Mat patch(40, 40, CV_8UC3);
+    cv::RNG(11).fill(patch, cv::RNG::UNIFORM, 0, 256);
+    patch.copyTo(patch_left(cv::Rect(60, 40, 40, 40)));
+    patch.copyTo(patch_right(cv::Rect(60, 40, 40, 40)));
+    const View patch_ref{"r", patch_left, ref.camera};
+    const std::vector<View> patch_nbs = {View{"n", patch_right, nbs[0].camera}};
+    const auto with_zero = DisparityRangeFromMatching(patch_left, patch_right);
+    ASSERT_TRUE(with_zero.has_value());
+    EXPECT_EQ(with_zero->first, 0.0);
+    for (const double percentile : {0.0, 2.0}) {
+      LabelRangeOptions options;
+      options.matching_far_percentile = percentile;
+      EXPECT_NE(ErrorOf([&] {
+                  MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, GcpSet{},
+                                 patch_ref, patch_nbs, 30.0, true, options);
+                }).find("is unbounded"),
+                std::string::npos)
+          << percentile;
+    }
+    LabelRangeOptions options;
+    options.matching_far_percentile = 10.0;
+    s = MakeLabelSpace(LabelSpaceKind::kDepth, 16, std::nullopt, std::nullopt, GcpSet{}, patch_ref,
+                       patch_nbs, 30.0, true, options, &summary);
+    EXPECT_EQ(summary.source, "matching-percentile");
+    EXPECT_NEAR(s.max(), 30.0 / 6.0 * 1.1, 0.5);
+    // Other label spaces keep the disparity-0 end (depth +inf is a finite label there).
+    s = MakeLabelSpace(LabelSpaceKind::kInverseDepth, 16, std::nullopt, std::nullopt, GcpSet{},
+                       patch_ref, patch_nbs, 30.0, true, options, &summary);
+    EXPECT_EQ(summary.source, "matching");
+    EXPECT_EQ(s.min(), 0.0);
+    options.matching_far_percentile = 50.0;
+    EXPECT_EQ(ErrorOf([&] { options.Check(); }),
+              "labels.auto.matching_far_percentile = 50. Violated constraint: 0 <= "
+              "matching_far_percentile < 50");
+  }
   // GCPs only on the background (depth 5 = disparity 6): the square's disparities still count…
   LabelRangeOptions options;
   options.gcp_low_percentile = 0;

@@ -92,6 +92,11 @@ void LabelRangeOptions::Check() const {
     throw ConfigError(
         ViolatedConstraint("labels.auto.max_depth", internal::Str(max_depth), "max_depth > 0"));
   }
+  if (!(matching_far_percentile >= 0.0 && matching_far_percentile < 50.0)) {
+    throw ConfigError(ViolatedConstraint("labels.auto.matching_far_percentile",
+                                         internal::Str(matching_far_percentile),
+                                         "0 <= matching_far_percentile < 50"));
+  }
 }
 
 std::pair<double, double> DepthRangeFromGcps(const GcpSet& gcps, double low_percentile,
@@ -164,7 +169,12 @@ std::pair<double, double> DepthRangeFromFrustumOverlap(const View& reference,
 
 std::optional<std::pair<double, double>> DisparityRangeFromMatching(const cv::Mat& left,
                                                                     const cv::Mat& right,
-                                                                    const cv::Mat& left_valid) {
+                                                                    const cv::Mat& left_valid,
+                                                                    double low_percentile) {
+  if (!(low_percentile >= 0.0 && low_percentile < 50.0)) {
+    throw Error("DisparityRangeFromMatching: low_percentile must lie in [0, 50), not " +
+                internal::Str(low_percentile));
+  }
   if (left.empty() || left.size() != right.size() || left.type() != right.type() ||
       left.depth() != CV_8U || (left.channels() != 1 && left.channels() != 3) ||
       (!left_valid.empty() && (left_valid.size() != left.size() || left_valid.type() != CV_8U))) {
@@ -210,7 +220,7 @@ std::optional<std::pair<double, double>> DisparityRangeFromMatching(const cv::Ma
   grey.convertTo(grey, CV_32F);
   cv::boxFilter(grey, mean, CV_32F, cv::Size(kBlock, kBlock));
   cv::boxFilter(grey.mul(grey), mean_of_squares, CV_32F, cv::Size(kBlock, kBlock));
-  int lowest = std::numeric_limits<int>::max(), highest = -1;
+  std::vector<std::int16_t> counted;
   for (int y = 0; y < disparity16.rows; ++y) {
     const auto* row = disparity16.ptr<std::int16_t>(y);
     const float* m = mean.ptr<float>(y);
@@ -219,17 +229,22 @@ std::optional<std::pair<double, double>> DisparityRangeFromMatching(const cv::Ma
     for (int x = 0; x < disparity16.cols; ++x) {
       if (row[x] < 0 || m2[x] - m[x] * m[x] < 1.0f) continue;  // grey-level variance < 1
       if (in_mask != nullptr && in_mask[x] == 0) continue;
-      lowest = std::min<int>(lowest, row[x]);
-      highest = std::max<int>(highest, row[x]);
+      counted.push_back(row[x]);
     }
   }
-  if (highest < 0) return std::nullopt;
+  if (counted.empty()) return std::nullopt;
+  const int highest = *std::max_element(counted.begin(), counted.end());
+  const auto rank = static_cast<std::ptrdiff_t>(
+      std::floor(low_percentile / 100.0 * static_cast<double>(counted.size() - 1)));
+  std::nth_element(counted.begin(), counted.begin() + rank, counted.end());
+  const int lowest = counted[static_cast<std::size_t>(rank)];
   return std::make_pair(lowest / 16.0 / scale, highest / 16.0 / scale);
 }
 
 std::optional<std::pair<double, double>> DepthRangeFromMatching(const View& reference,
                                                                 const std::vector<View>& neighbors,
-                                                                bool rectified_pair) {
+                                                                bool rectified_pair,
+                                                                double low_percentile) {
   if (neighbors.empty()) return std::nullopt;
   if (rectified_pair) {
     // d = f·B / depth, B the baseline to the first neighbour (the right image).
@@ -239,7 +254,8 @@ std::optional<std::pair<double, double>> DepthRangeFromMatching(const View& refe
     const double numerator = reference.camera.K(0, 0) *
                              (right.camera.center_world.x() - reference.camera.center_world.x());
     if (!(numerator > 0.0)) return std::nullopt;
-    const auto matched = DisparityRangeFromMatching(reference.image, right.image);
+    const auto matched =
+        DisparityRangeFromMatching(reference.image, right.image, cv::Mat(), low_percentile);
     if (!matched || !(matched->second > 0.0)) return std::nullopt;
     return std::make_pair(numerator / matched->second,
                           matched->first > 0.0 ? numerator / matched->first : kInf);
@@ -251,7 +267,8 @@ std::optional<std::pair<double, double>> DepthRangeFromMatching(const View& refe
     if (neighbor.image.size() != reference.image.size() || reference.image.empty()) continue;
     const RectifiedCalibratedPair pair = RectifyCalibratedPair(reference, neighbor);
     if (pair.vertical) continue;
-    const auto matched = DisparityRangeFromMatching(pair.left, pair.right, pair.left_valid);
+    const auto matched =
+        DisparityRangeFromMatching(pair.left, pair.right, pair.left_valid, low_percentile);
     if (!matched || !(matched->second > 0.0)) return std::nullopt;
     // z_rect = f·B / d; the reference camera's z of the point at rectified pixel (x, y) is
     // z_rect · (row 3 of ref_from_rect) · ((x − cx)/f, (y − cy)/f, 1), affine in x and y, so its
@@ -311,6 +328,17 @@ LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::op
       depth_range = {matched->first / (1.0 + options.margin),
                      std::min(matched->second * (1.0 + options.margin), options.max_depth)};
       source = "matching";
+      if (!std::isfinite(depth_range.second) && kind == LabelSpaceKind::kDepth && !max) {
+        // A depth space needs a bounded far end, and a few pixels matched at disparity 0 (a
+        // mismatch along a border, a patch of distant background) should not make the whole run
+        // fail: the far end is then taken at a low percentile of the matched disparities.
+        const auto robust = DepthRangeFromMatching(reference, neighbors, rectified_pair,
+                                                   options.matching_far_percentile);
+        if (robust && std::isfinite(robust->second)) {
+          depth_range.second = std::min(robust->second * (1.0 + options.margin), options.max_depth);
+          source = "matching-percentile";
+        }
+      }
     } else {
       depth_range = DepthRangeFromFrustumOverlap(reference, neighbors, options);
       source = "frustum";
@@ -339,8 +367,10 @@ LabelSpace MakeLabelSpace(LabelSpaceKind kind, std::optional<int> count, std::op
         "] from the " +
         (source == "gcps"       ? "GCPs"
          : source == "matching" ? "views' matched disparities"
-         : source == "frustum"  ? "neighbours' frustum overlap"
-                                : "GCPs and the views' matched disparities");
+         : source == "matching-percentile"
+             ? "views' matched disparities (far end at labels.auto.matching_far_percentile)"
+         : source == "frustum" ? "neighbours' frustum overlap"
+                               : "GCPs and the views' matched disparities");
     if (!max && kind == LabelSpaceKind::kDepth && !std::isfinite(z_max)) {
       throw ConfigError(ViolatedConstraint(
           "labels.max", "auto",

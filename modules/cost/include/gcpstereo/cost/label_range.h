@@ -35,6 +35,13 @@ struct LabelRangeOptions {
   // set's depth unit (metres); +inf = unbounded (fine for inverse depth / disparity labels, where
   // depth +inf is the value 0; depth labels then need labels.max). Range: > 0.
   double max_depth = std::numeric_limits<double>::infinity();
+  // [labels.auto.matching_far_percentile]: depth labels without GCPs and without labels.max, when
+  // the smallest matched disparity is 0 (the range would be unbounded): the far end is taken at
+  // this percentile of the matched disparities instead, in percent. A few percent of mismatches
+  // at disparity 0 are common (the synthetic tiny scene's view 0003: between 2 and 5 %); a far
+  // background larger than this share still leaves the range unbounded (use inverse depth).
+  // Range: 0 <= p < 50 (0 keeps the error).
+  double matching_far_percentile = 5.0;
 
   // Throws ConfigError naming the YAML key of the first invalid field.
   void Check() const;
@@ -68,26 +75,31 @@ std::pair<double, double> DepthRangeFromFrustumOverlap(const View& reference,
 // regions smaller than 0.5 % of the image, or varying by more than 1 px inside a region, are
 // dropped as mismatches; so are pixels whose 5×5 block has no texture (grey-level variance below
 // 1), which match every disparity alike, and pixels where `left_valid` (optional, CV_8U) is 0.
-// The result is the smallest and largest surviving disparity, in pixels of `left` (left x minus
-// right x); std::nullopt when nothing survives (e.g. a textureless pair). `left` and `right` are
-// 8-bit BGR or grey images of one size.
+// The result is the smallest (or, with `low_percentile` > 0, that percentile, in percent, of the)
+// and the largest surviving disparity, in pixels of `left` (left x minus right x); std::nullopt
+// when nothing survives (e.g. a textureless pair). `left` and `right` are 8-bit BGR or grey images
+// of one size.
 std::optional<std::pair<double, double>> DisparityRangeFromMatching(
-    const cv::Mat& left, const cv::Mat& right, const cv::Mat& left_valid = cv::Mat());
+    const cv::Mat& left, const cv::Mat& right, const cv::Mat& left_valid = cv::Mat(),
+    double low_percentile = 0.0);
 
 // The depths (reference camera z) the views show, [near, far] (far = +inf for disparity 0), from
 // DisparityRangeFromMatching: on the rectified pair of the reference and its first neighbour
 // (`rectified_pair`, the neighbour right of the reference), or, for calibrated views, on the
 // reference rectified with its nearest neighbour (RectifyCalibratedPair; the first that
 // rectifies horizontally), the rectified depths bounded in the reference's z over the image's
-// corners. std::nullopt when there is no usable neighbour or nothing matched.
+// corners. std::nullopt when there is no usable neighbour or nothing matched. `low_percentile`
+// is DisparityRangeFromMatching's (it sets the far end).
 std::optional<std::pair<double, double>> DepthRangeFromMatching(const View& reference,
                                                                 const std::vector<View>& neighbors,
-                                                                bool rectified_pair);
+                                                                bool rectified_pair,
+                                                                double low_percentile = 0.0);
 
 // Where MakeLabelSpace took its range from.
 struct LabelRangeSummary {
-  std::string source;      // "config", "gcps", "matching", "gcps+matching", "frustum", or e.g.
-                           // "config+gcps" when a bound was given
+  std::string source;  // "config", "gcps", "matching", "matching-percentile" (far end from
+                       // labels.auto.matching_far_percentile), "gcps+matching", "frustum", or e.g.
+                       // "config+gcps" when a bound was given
   double depth_min = 0.0;  // the automatic depth range, when one was computed (else 0)
   double depth_max = 0.0;
 };
