@@ -9,20 +9,22 @@
 #include <string>
 #include <thread>
 
+#include <unistd.h>
+
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/pipeline/pipeline_config.h"
 
 namespace gcpstereo::pipeline {
 namespace {
 
-// The process before any data: the executable with OpenCV, PCL, VTK, Ceres, SuiteSparse and TBB
-// loaded (peak of `run --set runtime.stop_after=load` on the tiny preset, whose images are 0.1 MB:
-// 112 MB).
+// Without the resident memory (a plan made before the run, `gcpstereo views`): the process before
+// any data, the executable with OpenCV, PCL, VTK, Ceres, SuiteSparse and TBB loaded (peak of
+// `run --set runtime.stop_after=load` on the tiny preset, whose images are 0.1 MB: 112 MB) ...
 constexpr double kBaseBytes = 110e6;
 
-// Per pixel of each view held (the reference and every neighbour): the BGR image, its grey and
-// float copies and the plane sweep's padded copy of each neighbour. Measured: the small preset's
-// 7 views of 640×427 add 11 MB at runtime.stop_after=load over the tiny preset's 112.
+// ... and per pixel of each view held (the reference and every neighbour): the BGR image, its grey
+// and float copies and the plane sweep's padded copy of each neighbour. Measured: the small
+// preset's 7 views of 640×427 add 11 MB at runtime.stop_after=load over the tiny preset's 112.
 constexpr double kViewBytesPerPixel = 8.0;
 
 // Per pixel of the reference, the propagation (D̂, eq. 5) at its peak, from the small preset
@@ -51,6 +53,8 @@ constexpr double kTileBytesPerPixel = 176.0 + 68.0 + 11.0;
 // program, Jacobians and solver. Measured: the small preset (640×427, 48 labels, one tile, one
 // thread) peaks at 810 MB with it, 236 MB with the parabola, which needs nothing more.
 constexpr double kCeresBytesPerPixel = 2400.0;
+
+constexpr double kWindowFilterBytesPerPixel = 300.0;
 
 std::string Megabytes(double bytes) {
   char text[32];
@@ -92,6 +96,8 @@ ViewMemoryInput ViewMemoryInputOf(const PipelineConfig& options, int width_px, i
   input.solver = options.propagation.solver;
   input.refinement = options.optimizer.refinement_method;
   input.has_gcps = !options.gcp.sources.empty();
+  input.window_filter = options.cost.birchfield_tomasi.window.window_px > 1 ||
+                        options.cost.plane_sweep.window.window_px > 1;
   input.optimize = options.runtime.stop_after == "all";
   return input;
 }
@@ -99,8 +105,12 @@ ViewMemoryInput ViewMemoryInputOf(const PipelineConfig& options, int width_px, i
 MemoryEstimate EstimateViewMemory(const ViewMemoryInput& in) {
   MemoryEstimate e;
   const double pixels = static_cast<double>(in.width_px) * in.height_px;
-  e.base_bytes = kBaseBytes;
-  e.views_bytes = kViewBytesPerPixel * pixels * (1 + std::max(0, in.neighbors));
+  if (in.resident_bytes > 0.0) {
+    e.base_bytes = in.resident_bytes;
+  } else {
+    e.base_bytes = kBaseBytes;
+    e.views_bytes = kViewBytesPerPixel * pixels * (1 + std::max(0, in.neighbors));
+  }
   if (in.has_gcps)
     e.propagation_bytes = PropagationBytesPerPixel(in.propagation, in.solver) * pixels;
   if (in.optimize) {
@@ -114,12 +124,23 @@ MemoryEstimate EstimateViewMemory(const ViewMemoryInput& in) {
     const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     e.concurrent_tiles = std::min(rows * cols, in.threads > 0 ? in.threads : cores);
     const double labels = std::max(1, in.labels);
-    const double expansion = kTileBytesPerPixelLabel * labels + kTileBytesPerPixel;
+    double expansion = kTileBytesPerPixelLabel * labels + kTileBytesPerPixel;
+    // The window aggregation (cost_filter.cc) returns a filtered volume beside the raw one, with
+    // the guided filter's per-pixel double images (the guide, its means and inverse covariances,
+    // and each thread's cost, mean, result and coefficient rows: about 300 bytes).
+    if (in.window_filter) expansion += 2.0 * labels + kWindowFilterBytesPerPixel;
     const double refinement =
         in.refinement == "ceres" ? 2.0 * labels + kCeresBytesPerPixel + 11.0 : 0.0;
     e.optimization_bytes = e.concurrent_tiles * e.tile_pixels * std::max(expansion, refinement);
   }
   return e;
+}
+
+double ResidentMemoryBytes() {
+  std::ifstream in("/proc/self/statm");
+  double total_pages = 0.0, resident_pages = 0.0;
+  if (!(in >> total_pages >> resident_pages)) return 0.0;
+  return resident_pages * static_cast<double>(sysconf(_SC_PAGESIZE));
 }
 
 double AvailableMemoryBytes() {

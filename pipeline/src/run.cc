@@ -252,9 +252,11 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
 
   // The peak memory, estimated before D̂'s system, the cost volumes and the graphs are allocated:
   // a view larger than the machine (or runtime.max_memory_gb) is refused here, not killed later.
-  const MemoryEstimate memory = EstimateViewMemory(
+  ViewMemoryInput memory_input =
       ViewMemoryInputOf(options, reference.image.cols, reference.image.rows, labels.count(),
-                        static_cast<int>(dataset.neighbors.size())));
+                        static_cast<int>(dataset.neighbors.size()));
+  memory_input.resident_bytes = ResidentMemoryBytes();
+  const MemoryEstimate memory = EstimateViewMemory(memory_input);
   report["memory_estimate"] = memory.ToJson();
   spdlog::info("memory: estimated peak {:.0f} MB", memory.total_bytes() / 1e6);
   CheckMemoryBudget(memory, options.runtime.max_memory_gb);

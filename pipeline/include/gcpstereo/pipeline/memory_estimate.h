@@ -23,14 +23,18 @@ struct ViewMemoryInput {
   std::string propagation = "linear_system";  // propagation.method
   std::string solver = "cholmod";             // propagation.solver
   std::string refinement = "ceres";           // optimizer.refinement
-  bool has_gcps = true;                       // no GCPs: no propagation
-  bool optimize = true;                       // false when the run stops after the propagation
+  bool window_filter = false;  // the cost's window aggregation (cost.window_px or sweep_ > 1)
+  // The process's resident memory when the estimate is made (images, GCPs, libraries): replaces
+  // the base and views terms when > 0 (a run knows it; a plan before the run does not).
+  double resident_bytes = 0.0;
+  bool has_gcps = true;  // no GCPs: no propagation
+  bool optimize = true;  // false when the run stops after the propagation
 };
 
 // The estimate, in bytes, with its parts (report.json "memory_estimate").
 struct MemoryEstimate {
-  double base_bytes = 0.0;          // the process with its libraries loaded
-  double views_bytes = 0.0;         // the reference's and neighbours' images
+  double base_bytes = 0.0;   // the process with its libraries loaded (or its resident memory)
+  double views_bytes = 0.0;  // the reference's and neighbours' images (0 with resident memory)
   double propagation_bytes = 0.0;   // D̂'s solve (the sparse system and its factor)
   double optimization_bytes = 0.0;  // the tiles solved at once: cost volumes, graphs, buffers
   int concurrent_tiles = 0;
@@ -44,6 +48,9 @@ struct MemoryEstimate {
 ViewMemoryInput ViewMemoryInputOf(const PipelineConfig& options, int width_px, int height_px,
                                   int labels, int neighbors);
 MemoryEstimate EstimateViewMemory(const ViewMemoryInput& input);
+
+// This process's resident memory now, from /proc/self/statm (0 when it cannot be read).
+double ResidentMemoryBytes();
 
 // /proc/meminfo's MemAvailable in bytes (0 when it cannot be read).
 double AvailableMemoryBytes();
