@@ -1,6 +1,8 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "commands.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -12,6 +14,7 @@
 #include "gcpstereo/core/logging.h"
 #include "gcpstereo/core/progress.h"
 #include "gcpstereo/core/system.h"
+#include "gcpstereo/pipeline/memory_estimate.h"
 #include "gcpstereo/pipeline/pipeline_config.h"
 #include "gcpstereo/pipeline/run.h"
 #include "gcpstereo/pipeline/scene.h"
@@ -42,11 +45,25 @@ int Views(const ViewsArgs& args) {
   pipeline::LoadedConfig config;
   config.Load(args.config_path, args.overrides);
   const pipeline::PipelineConfig& o = config.options();
+  const std::vector<pipeline::ViewJob> jobs = pipeline::PlanViewJobs(config);
   nlohmann::json views = nlohmann::json::array();
-  for (const pipeline::ViewJob& job : pipeline::PlanViewJobs(config)) {
+  for (const pipeline::ViewJob& job : jobs) {
+    // The run's own estimate of the view's peak (memory_estimate.h): labels not known before the
+    // run (labels.count auto: one per pixel of disparity) count as a quarter of the image's width,
+    // neighbours not chosen yet as dataset.neighbor_count (or every other view).
+    const int labels = o.labels.count ? *o.labels.count : std::max(2, job.width_px / 4);
+    int neighbors = static_cast<int>(jobs.size()) - 1;
+    if (o.dataset.AutoNeighbors()) {
+      neighbors = o.dataset.neighbor_selection.count;
+    } else if (!o.dataset.neighbors.empty()) {
+      neighbors = static_cast<int>(o.dataset.neighbors.size());
+    }
+    const pipeline::MemoryEstimate memory = pipeline::EstimateViewMemory(
+        pipeline::ViewMemoryInputOf(o, job.width_px, job.height_px, labels, neighbors));
     views.push_back({{"name", job.name},
                      {"width_px", job.width_px},
                      {"height_px", job.height_px},
+                     {"memory_estimate_mb", std::ceil(memory.total_bytes() / 1e6)},
                      {"overrides", job.overrides}});
   }
   // What a job's memory and time scale with (pipeline/workflow/Snakefile): the label count

@@ -90,7 +90,22 @@ void OutputFolder::Commit() {
     const fs::path stale = fs::path(final_dir_) / name;
     if (fs::is_regular_file(fs::symlink_status(stale, ec))) fs::remove(stale, ec);
   }
-  for (const auto& name : names_) {
+  // Each file moves by one rename: a run killed during these few milliseconds leaves every file
+  // whole, the previous run's or this one's. The previous effective_config.yaml goes first and
+  // the new one moves last, after report.json: a scene run reuses a view folder only when both
+  // are there and the configuration is its own (scene.cc, ViewFolderComplete), so a commit cut
+  // short is never taken for a finished view, of either configuration.
+  if (std::find(written.begin(), written.end(), "effective_config.yaml") != written.end()) {
+    std::error_code ec;
+    fs::remove(fs::path(final_dir_) / "effective_config.yaml", ec);
+  }
+  std::vector<std::string> order = names_;
+  std::stable_partition(order.begin(), order.end(), [](const std::string& name) {
+    return name != "report.json" && name != "effective_config.yaml";
+  });
+  std::stable_partition(order.begin(), order.end(),
+                        [](const std::string& name) { return name != "effective_config.yaml"; });
+  for (const auto& name : order) {
     const fs::path from = fs::path(staging_dir_) / name;
     std::error_code ec;
     if (!fs::exists(from, ec)) continue;  // a file that was planned but not written

@@ -506,6 +506,12 @@ void PipelineConfig::Register(config::Schema* s) {
 
   s->Add("runtime.threads", &runtime.threads, Range::Between(0, 1024),
          {"worker threads; 0 = all cores. Results do not depend on it"});
+  s->Add("runtime.max_memory_gb", &runtime.max_memory_gb, Range::AtLeast(0.0),
+         {"refuse a view whose estimated peak memory (report.json memory_estimate, made before "
+          "the propagation, cost volumes and graphs are allocated) exceeds this; 0 = the memory "
+          "available on the machine (/proc/meminfo MemAvailable). More optimizer.tiles, a smaller "
+          "dataset.scale or fewer labels.count lower the estimate",
+          "GB"});
   s->Add("runtime.log_level", &runtime.log_level,
          {"trace", "debug", "info", "warn", "error", "off"}, {"terminal log level"});
 

@@ -21,10 +21,12 @@
 #include "gcpstereo/io/point_cloud_io.h"
 #include "gcpstereo/io/preview.h"
 #include "gcpstereo/mesh/meshing.h"
+#include "gcpstereo/pipeline/memory_estimate.h"
 #include "gcpstereo/pipeline/output_folder.h"
 #include "gcpstereo/pipeline/scene.h"
 #include "scene_internal.h"
 #include "stage_clock.h"
+#include "thread_limit.h"
 #include "view_run.h"
 #include "view_stages.h"
 
@@ -248,6 +250,17 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
     return Finish(config, out, total, &report, {});
   }
 
+  // The peak memory, estimated before D̂'s system, the cost volumes and the graphs are allocated:
+  // a view larger than the machine (or runtime.max_memory_gb) is refused here, not killed later.
+  ViewMemoryInput memory_input =
+      ViewMemoryInputOf(options, reference.image.cols, reference.image.rows, labels.count(),
+                        static_cast<int>(dataset.neighbors.size()));
+  memory_input.resident_bytes = ResidentMemoryBytes();
+  const MemoryEstimate memory = EstimateViewMemory(memory_input);
+  report["memory_estimate"] = memory.ToJson();
+  spdlog::info("memory: estimated peak {:.0f} MB", memory.total_bytes() / 1e6);
+  CheckMemoryBudget(memory, options.runtime.max_memory_gb);
+
   // 3. Adaptive propagation of the GCPs (eq. 5): D̂, the prior of the GCP energy. In the data
   // set's units it is an output of every run with GCPs, and the product of one stopped here
   // (LiDAR depth completion without stereo).
@@ -299,6 +312,7 @@ RunSummary RunPipeline(const LoadedConfig& config, const std::string& output_dir
     const std::unique_ptr<LoadedConfig> chosen = ConfigWithChosenNeighbors(config);
     return RunPipeline(*chosen, output_dir, config_path);
   }
+  const ScopedThreadLimit thread_limit(config.options().runtime.threads);
   OutputFolder out(output_dir);
   const ScopedLogFile log_file(out.FinalPath("run.log"));
   try {

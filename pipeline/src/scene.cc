@@ -37,6 +37,7 @@
 #include "gcpstereo/pipeline/output_folder.h"
 #include "scene_internal.h"
 #include "stage_clock.h"
+#include "thread_limit.h"
 
 namespace gcpstereo::pipeline {
 namespace {
@@ -799,6 +800,7 @@ std::vector<ViewJob> PlanViewJobs(const LoadedConfig& config) {
 RunSummary RunScene(const LoadedConfig& config, const std::string& output_dir,
                     const SceneRunOptions& options) {
   const PipelineConfig& o = config.options();
+  const ScopedThreadLimit thread_limit(o.runtime.threads);
   Timer total;
   OutputFolder out(output_dir);
   const ScopedLogFile log_file(out.FinalPath("run.log"));
@@ -873,6 +875,7 @@ RunSummary FuseViewFolders(const FuseRequest& request) {
   LoadedConfig config;
   config.Load((fs::path(request.view_dirs.front()) / "effective_config.yaml").string(),
               request.overrides);
+  const ScopedThreadLimit thread_limit(config.options().runtime.threads);
   OutputFolder out(request.output_dir);
   const ScopedLogFile log_file(out.FinalPath("run.log"));
 

@@ -249,7 +249,7 @@ TEST(Cli, ViewsPrintsTheSceneAsJsonAndFuseOnlyNeedsAScene) {
   EXPECT_EQ(views.output.front(), '{') << views.output;
   for (const char* expected :
        {"\"scene\": true", "\"labels\": 32", "\"name\": \"0004\"", "\"name\": \"0006\"",
-        "\"width_px\": 160", "\"dataset.reference=\\\"0006\\\"\""}) {
+        "\"width_px\": 160", "\"memory_estimate_mb\": ", "\"dataset.reference=\\\"0006\\\"\""}) {
     EXPECT_NE(views.output.find(expected), std::string::npos) << expected << " in\n"
                                                               << views.output;
   }

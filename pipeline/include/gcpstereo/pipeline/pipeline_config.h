@@ -151,6 +151,7 @@ struct RuntimeOptions {
   int threads = 0;  // worker threads; 0 = all cores
   std::string log_level = "info";
   std::string stop_after = "all";  // load | gcps | propagation | all
+  double max_memory_gb = 0.0;      // refuse a view estimated above this; 0 = the memory available
 };
 
 // Keys of the `eval:` section.
