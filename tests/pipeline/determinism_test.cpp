@@ -12,6 +12,7 @@
 #include "gcpstereo/synth/generator.h"
 #include "gcpstereo/synth/writer.h"
 #include "test_data.h"
+#include "tiny_data.h"
 
 namespace gcpstereo::pipeline {
 namespace {
@@ -22,11 +23,7 @@ namespace fs = std::filesystem;
 class Determinism : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::string(testing::MakeTempDir("gcpstereo-determinism"));
-    synth::SynthOptions options;
-    options.preset = "tiny";
-    options.seed = 7;
-    synth::WriteScene(synth::GenerateScene(options), options, *dir_ + "/data");
+    dir_ = new std::string(testing::WriteTinyData("gcpstereo-determinism"));
   }
   static void TearDownTestSuite() {
     delete dir_;

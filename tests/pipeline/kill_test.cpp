@@ -24,6 +24,7 @@
 #include "gcpstereo/synth/generator.h"
 #include "gcpstereo/synth/writer.h"
 #include "test_data.h"
+#include "tiny_data.h"
 
 extern char** environ;
 
@@ -114,13 +115,7 @@ std::vector<std::string> StagingFolders(const std::string& dir) {
 
 class KilledRun : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new std::string(testing::MakeTempDir("gcpstereo-kill"));
-    synth::SynthOptions options;
-    options.preset = "tiny";
-    options.seed = 7;
-    synth::WriteScene(synth::GenerateScene(options), options, *dir_ + "/data");
-  }
+  static void SetUpTestSuite() { dir_ = new std::string(testing::WriteTinyData("gcpstereo-kill")); }
   static void TearDownTestSuite() {
     delete dir_;
     dir_ = nullptr;

@@ -15,6 +15,7 @@
 #include "gcpstereo/synth/generator.h"
 #include "gcpstereo/synth/writer.h"
 #include "test_data.h"
+#include "tiny_data.h"
 
 namespace gcpstereo::pipeline {
 namespace {
@@ -77,11 +78,7 @@ TEST(MemoryEstimate, BudgetIsTheKeyOrTheMachinesAvailableMemory) {
 class TinyMemory : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::string(testing::MakeTempDir("gcpstereo-memory"));
-    synth::SynthOptions options;
-    options.preset = "tiny";
-    options.seed = 7;
-    synth::WriteScene(synth::GenerateScene(options), options, *dir_ + "/data");
+    dir_ = new std::string(testing::WriteTinyData("gcpstereo-memory"));
   }
   static void TearDownTestSuite() {
     delete dir_;

@@ -20,6 +20,7 @@
 #include "gcpstereo/synth/generator.h"
 #include "gcpstereo/synth/writer.h"
 #include "test_data.h"
+#include "tiny_data.h"
 
 namespace gcpstereo::pipeline {
 namespace {
@@ -28,13 +29,7 @@ namespace fs = std::filesystem;
 
 class TinyScene : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new std::string(testing::MakeTempDir("gcpstereo-run"));
-    synth::SynthOptions options;
-    options.preset = "tiny";
-    options.seed = 7;
-    synth::WriteScene(synth::GenerateScene(options), options, *dir_ + "/data");
-  }
+  static void SetUpTestSuite() { dir_ = new std::string(testing::WriteTinyData("gcpstereo-run")); }
   static void TearDownTestSuite() {
     delete dir_;
     dir_ = nullptr;

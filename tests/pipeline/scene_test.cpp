@@ -19,6 +19,7 @@
 #include "gcpstereo/synth/generator.h"
 #include "gcpstereo/synth/writer.h"
 #include "test_data.h"
+#include "tiny_data.h"
 
 namespace gcpstereo::pipeline {
 namespace {
@@ -31,11 +32,7 @@ using nlohmann::json;
 class TinySceneRun : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::string(testing::MakeTempDir("gcpstereo-scene"));
-    synth::SynthOptions options;
-    options.preset = "tiny";
-    options.seed = 7;
-    synth::WriteScene(synth::GenerateScene(options), options, *dir_ + "/data");
+    dir_ = new std::string(testing::WriteTinyData("gcpstereo-scene"));
   }
   static void TearDownTestSuite() {
     delete dir_;
