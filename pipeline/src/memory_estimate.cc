@@ -11,6 +11,10 @@
 
 #include <unistd.h>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/pipeline/pipeline_config.h"
 
@@ -141,6 +145,12 @@ double ResidentMemoryBytes() {
   double total_pages = 0.0, resident_pages = 0.0;
   if (!(in >> total_pages >> resident_pages)) return 0.0;
   return resident_pages * static_cast<double>(sysconf(_SC_PAGESIZE));
+}
+
+void ReleaseFreedHeapMemory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
 }
 
 double AvailableMemoryBytes() {

@@ -255,6 +255,7 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
   ViewMemoryInput memory_input =
       ViewMemoryInputOf(options, reference.image.cols, reference.image.rows, labels.count(),
                         static_cast<int>(dataset.neighbors.size()));
+  ReleaseFreedHeapMemory();
   memory_input.resident_bytes = ResidentMemoryBytes();
   const MemoryEstimate memory = EstimateViewMemory(memory_input);
   report["memory_estimate"] = memory.ToJson();
