@@ -196,6 +196,17 @@ TEST(PointCloudIo, FuzzerFindingsAreRefusedBeforePcl) {
   EXPECT_EQ(ErrorOf(pcd), pcd +
                               ": cannot read point cloud: inconsistent fields or sizes (field 'z' "
                               "outside the 8-byte point record)");
+  // No point at all: pcl::fromPCLPointCloud2 referenced element 0 of the empty cloud.
+  WriteRaw(ply,
+           "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+           "property float z\nend_header\n");
+  EXPECT_EQ(ErrorOf(ply), ply + ": point cloud is empty");
+  WriteRaw(pcd, head + "SIZE 4 4 4\nTYPE F F F\nWIDTH 0\nHEIGHT 1\nDATA ascii\n");
+  EXPECT_EQ(ErrorOf(pcd), pcd + ": point cloud is empty");
+  // A header line of only "\r": PCL read through a null pointer.
+  WriteRaw(pcd, "\r\n" + head + "SIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
+  EXPECT_EQ(ErrorOf(pcd),
+            pcd + ": not a valid PCD file: a header line holding only a carriage return");
   // An ASCII value count larger than the file can hold.
   WriteRaw(pcd, head + "SIZE 4 4 4\nCOUNT 1 1 30\n" + tail);
   EXPECT_NE(ErrorOf(pcd).find(": not a valid PCD file: its header declares 3 points of at least 64 "

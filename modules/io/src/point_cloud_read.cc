@@ -200,6 +200,9 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
     std::string data;
     while (!done && header_bytes < (1u << 20) && std::getline(in, line)) {
       header_bytes += line.size() + 1;
+      // A header line of only a carriage return made PCL 1.13 read through a null pointer (found
+      // by fuzzing); an empty line is harmless.
+      if (line == "\r") fail("a header line holding only a carriage return");
       if (!line.empty() && line.back() == '\r') line.pop_back();
       if (line.empty() || line[0] == '#') continue;
       std::istringstream words(line);
@@ -357,6 +360,10 @@ PointCloud ReadWithPcl(const std::string& path, bool ply) {
     if (!present) throw IoError(path, std::string("point cloud has no '") + axis + "' field");
   }
   CheckBlob(path, blob);
+  // pcl::fromPCLPointCloud2 takes &cloud[0] of an empty cloud (UBSan; found by fuzzing).
+  if (static_cast<std::uint64_t>(blob.width) * blob.height == 0) {
+    throw IoError(path, "point cloud is empty");
+  }
   pcl::PointCloud<pcl::PointXYZ> xyz;
   pcl::fromPCLPointCloud2(blob, xyz);
   PointCloud cloud;
