@@ -16,9 +16,8 @@
 #include <gtest/gtest.h>
 
 #include "cli_runner.h"
-#include "gcpstereo/synth/generator.h"
-#include "gcpstereo/synth/writer.h"
 #include "test_data.h"
+#include "tiny_data.h"
 
 namespace gcpstereo {
 namespace {
@@ -31,11 +30,7 @@ using testing::WriteFile;
 class BadInput : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new fs::path(testing::MakeTempDir("gcpstereo-bad-input"));
-    synth::SynthOptions options;
-    options.preset = "tiny";
-    options.seed = 7;
-    synth::WriteScene(synth::GenerateScene(options), options, (*dir_ / "data").string());
+    dir_ = new fs::path(testing::WriteTinyData("gcpstereo-bad-input"));
     // A valid, fast configuration: the cases below break one thing in it.
     WriteFile(*dir_ / "ok.yaml", "dataset:\n  format: strecha\n  path: " + Data().string() +
                                      "\n  reference: '0005'\nlabels:\n  count: 16\ngcp:\n"
