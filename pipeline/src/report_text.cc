@@ -42,7 +42,10 @@ std::vector<std::pair<std::string, Table>> MetricsTables(const json& metrics) {
   if (metrics.contains("middlebury")) {
     Table t{{"disparity map", "nonocc bad-1", "all bad-1", "disc bad-1", "nonocc bad-0.5",
              "nonocc bad-2", "all mean |error| px"}};
-    for (const auto& [name, r] : metrics["middlebury"].items()) {
+    for (const auto& item : metrics["middlebury"].items()) {
+      // Not a structured binding: C++17 does not let a lambda capture one (clang refuses it).
+      const std::string& name = item.key();
+      const json& r = item.value();
       if (!r.is_object()) continue;
       auto bad = [&](const char* region, int index) {
         const json& stats = r[region];

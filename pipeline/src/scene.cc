@@ -233,6 +233,12 @@ void CheckViewFolder(const std::string& dir, const std::vector<std::string>& fil
   for (const std::string& file : files) {
     std::error_code ec;
     if (!fs::is_regular_file(fs::path(dir) / file, ec)) {
+      // A view run with runtime.stop_after: propagation is finished but has D̂ only.
+      if (file == "depth.pfm" && fs::is_regular_file(fs::path(dir) / "propagated_depth.pfm", ec)) {
+        throw IoError((fs::path(dir) / file).string(),
+                      "not found, but propagated_depth.pfm is (a view run with runtime.stop_after: "
+                      "propagation? --set fusion.input=propagated fuses that)");
+      }
       throw IoError((fs::path(dir) / file).string(),
                     "not found: the folder is not a finished per-view run of gcpstereo");
     }

@@ -473,6 +473,26 @@ TEST(ColmapErrors, ImageOfAnotherSizeThanItsCamera) {
                     HasSubstr("image is 32x24 but its COLMAP camera 1 is 64x48")));
 }
 
+// A corrupt camera size (found with tests/fuzz/colmap_txt_fuzzer.cc): a distorting camera of
+// 100000x100000 px used to have its undistortion maps (80 GB) allocated before any image was
+// read. The image's size is now checked first: one line, no allocation.
+TEST(ColmapErrors, HugeCameraIsRefusedBeforeItsMapsAreAllocated) {
+  TestModel m = TinyModel();
+  const std::string dir = WriteWorkspace(m, testing::MakeTempDir("colmap_huge"));
+  m.cameras[0].model = "OPENCV";
+  m.cameras[0].model_id = 4;
+  m.cameras[0].width = m.cameras[0].height = 100000;
+  m.cameras[0].params = {70.0, 72.5, 32.25, 23.75, 0.01, -0.002, 0.001, 0.0005};
+  WriteModelBinary(m, dir + "/sparse");
+  DatasetRequest request;
+  request.format = "colmap";
+  request.path = dir;
+  request.reference = "a.png";
+  EXPECT_EQ(ErrorOf([&] { LoadDataset(request); }),
+            dir + "/images/a.png: image is 64x48 but its COLMAP camera 1 is 100000x100000 "
+                  "(resized images need a model of their size)");
+}
+
 TEST(ColmapErrors, BrokenReferencesAndTextLines) {
   const std::string dir = testing::MakeTempDir("colmap_refs");
   TestModel m = TinyModel();

@@ -265,8 +265,8 @@ TEST_F(MiddleburyDataset, MismatchedSizesAndEmptyFolder) {
   cv::imwrite(dir_ + "/im4.ppm", RandomImage(11, 20, CV_8UC3, 4));
   EXPECT_EQ(ErrorOf([&] { LoadDataset(Request()); }),
             dir_ +
-                "/im4.ppm: image is 20x11, the reference is 20x10 (views of a rectified set "
-                "must match)");
+                "/im4.ppm: image is 20x11, the reference im2.ppm is 20x10 (views of a "
+                "rectified set must match)");
   const std::string empty = testing::MakeTempDir("io-middlebury-empty");
   DatasetRequest r = Request();
   r.path = empty;

@@ -156,6 +156,65 @@ TEST(PointCloudIo, CorruptPcd) {
   EXPECT_NE(ErrorOf(path).find("not a valid PCD file"), std::string::npos) << ErrorOf(path);
 }
 
+// Inputs tools/fuzz.sh found (reduced but the last): PCL 1.13 aborts on a list property of the
+// vertex element, allocates SIZE × COUNT bytes per point (also for ASCII data) before reading any,
+// and can return a cloud whose fields lie outside its records; counts beyond 2^64 overflowed the
+// header check's integers. Each is refused, naming the file.
+TEST(PointCloudIo, FuzzerFindingsAreRefusedBeforePcl) {
+  const std::string dir = testing::MakeTempDir("io-cloud-fuzz");
+  const std::string ply = dir + "/list.ply";
+  std::string bytes =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
+      "property float y\nproperty float z\nproperty list uchar int vertex_indices\nend_header\n";
+  bytes += std::string(12, '\0') + std::string("\x01\x02\0\0\0", 5);
+  WriteRaw(ply, bytes);
+  EXPECT_EQ(ErrorOf(ply), ply +
+                              ": not a valid PLY file: a list property in element 'vertex' (only "
+                              "scalar vertex properties are read)");
+  const std::string pcd = dir + "/size.pcd";
+  const std::string head = "VERSION 0.7\nFIELDS x y z\n";
+  const std::string tail = "TYPE F F F\nPOINTS 3\nDATA ascii\n0 0 1\n1 0 2\n-1 0 3\n";
+  WriteRaw(pcd, head + "SIZE 8 4 444444444444444\n" + tail);
+  EXPECT_EQ(ErrorOf(pcd), pcd + ": not a valid PCD file: SIZE 4.44444e+14 (expected 1, 2, 4 or 8)");
+  WriteRaw(pcd, head + "SIZE 4 4 4\nCOUNT 1 1 4000000000\n" + tail);
+  EXPECT_EQ(ErrorOf(pcd), pcd + ": not a valid PCD file: COUNT 4e+09 (expected 1 to the file's " +
+                              std::to_string(head.size() + tail.size() + 32) + " bytes)");
+  // A count that does not fit an integer (UBSan: float-cast overflow).
+  WriteRaw(ply, "ply\nformat ascii 1.0\nelement vertex 88888888888888888888\nend_header\n");
+  EXPECT_EQ(ErrorOf(ply),
+            ply + ": not a valid PLY file: element 'vertex' declares 8.88889e+19 records");
+  WriteRaw(pcd, head + "WIDTH 1e30\nHEIGHT 1\n" + tail);
+  EXPECT_EQ(ErrorOf(pcd), pcd + ": not a valid PCD file: WIDTH 1e+30");
+  // Two FIELDS lines and a broken SIZE line: PCL returned a cloud whose data disagreed with its
+  // fields, and pcl::fromPCLPointCloud2 indexed an empty cloud (the fuzzer's input, as found).
+  const std::string fields(
+      "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z intensityDNT 7\nFIELDS x y z intensit\x82\n"
+      "SIZE 4 4 inten\0IEWPOINTS 3\nDATA binary\n\0\0\0CD v0..7\nVERSION "
+      "0\x8d\x8d\x8d\x8d@\0\0\xa0@",
+      144);
+  WriteRaw(pcd, fields);
+  EXPECT_EQ(ErrorOf(pcd), pcd +
+                              ": cannot read point cloud: inconsistent fields or sizes (field 'z' "
+                              "outside the 8-byte point record)");
+  // No point at all: pcl::fromPCLPointCloud2 referenced element 0 of the empty cloud.
+  WriteRaw(ply,
+           "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+           "property float z\nend_header\n");
+  EXPECT_EQ(ErrorOf(ply), ply + ": point cloud is empty");
+  WriteRaw(pcd, head + "SIZE 4 4 4\nTYPE F F F\nWIDTH 0\nHEIGHT 1\nDATA ascii\n");
+  EXPECT_EQ(ErrorOf(pcd), pcd + ": point cloud is empty");
+  // A header line of only "\r": PCL read through a null pointer.
+  WriteRaw(pcd, "\r\n" + head + "SIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
+  EXPECT_EQ(ErrorOf(pcd),
+            pcd + ": not a valid PCD file: a header line holding only a carriage return");
+  // An ASCII value count larger than the file can hold.
+  WriteRaw(pcd, head + "SIZE 4 4 4\nCOUNT 1 1 30\n" + tail);
+  EXPECT_NE(ErrorOf(pcd).find(": not a valid PCD file: its header declares 3 points of at least 64 "
+                              "bytes"),
+            std::string::npos)
+      << ErrorOf(pcd);
+}
+
 TEST(PointCloudIo, NonFiniteEmptyAndUnknownExtension) {
   const std::string dir = testing::MakeTempDir("io-cloud");
   PointCloud cloud = RandomCloud(5, false, false, 7);

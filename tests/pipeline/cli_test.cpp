@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cli_runner.h"
 #include "gcpstereo/core/camera.h"
 #include "gcpstereo/io/camera_io.h"
 #include "test_data.h"
@@ -19,33 +20,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status = -1;
-  std::string output;  // stdout and stderr, or stderr only
-};
-
-// Runs `args` through the shell (in the folder `working_dir` when given); captures stderr (and
-// stdout when `with_stdout`).
-Result RunCli(const std::string& args, bool with_stdout = false,
-              const std::string& working_dir = "") {
-  const std::string command = (working_dir.empty() ? "" : "cd '" + working_dir + "' && ") +
-                              std::string(GCPSTEREO_EXECUTABLE) + " " + args +
-                              (with_stdout ? " 2>&1" : " 2>&1 >/dev/null");
-  Result r;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buffer;
-  size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-std::string WriteFile(const fs::path& path, const std::string& text) {
-  std::ofstream(path) << text;
-  return path.string();
-}
+using Result = testing::CliResult;
+using testing::RunCli;
+using testing::WriteFile;
 
 TEST(Cli, HelpListsTheCommands) {
   const Result r = RunCli("--help", true);

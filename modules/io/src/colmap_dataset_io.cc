@@ -20,10 +20,12 @@ namespace fs = std::filesystem;
 namespace gcpstereo::io {
 namespace {
 
+// `pinholes`: the cameras converted so far, shared by the views (the undistortion maps are made
+// once per camera), extended with this view's camera.
 View LoadColmapView(const std::string& path, const ColmapModel& model, const std::string& name,
-                    const std::map<std::uint32_t, ColmapPinhole>& pinholes, double scale) {
+                    std::map<std::uint32_t, ColmapPinhole>* pinholes, double scale) {
   const ColmapImage& image = *model.FindImage(name);
-  const ColmapPinhole& pinhole = pinholes.at(image.camera_id);
+  const ColmapCamera& camera = model.cameras.at(image.camera_id);
   const std::string image_path = (fs::path(path) / "images" / name).string();
   if (!internal::IsFile(image_path)) {
     throw IoError(image_path, "image " + name + " of the COLMAP model " + model.sparse_dir +
@@ -32,14 +34,23 @@ View LoadColmapView(const std::string& path, const ColmapModel& model, const std
   View view;
   view.name = name;
   view.image = ReadColorImage(image_path);
-  if (view.image.cols != pinhole.width || view.image.rows != pinhole.height) {
+  // The size is checked before the camera is converted: the undistortion maps have the camera's
+  // size, and a corrupt cameras file declaring 100000x100000 px would allocate 80 GB for them
+  // (found with the COLMAP fuzz harnesses, tests/fuzz/colmap_*_fuzzer.cc).
+  if (static_cast<std::uint64_t>(view.image.cols) != camera.width ||
+      static_cast<std::uint64_t>(view.image.rows) != camera.height) {
     // COLMAP 3.8's image_undistorter --max_image_size shrinks the images but not the cameras.
     std::ostringstream s;
     s << "image is " << view.image.cols << "x" << view.image.rows << " but its COLMAP camera "
-      << image.camera_id << " is " << pinhole.width << "x" << pinhole.height
+      << image.camera_id << " is " << camera.width << "x" << camera.height
       << " (resized images need a model of their size)";
     throw IoError(image_path, s.str());
   }
+  auto it = pinholes->find(image.camera_id);
+  if (it == pinholes->end()) {
+    it = pinholes->emplace(image.camera_id, MakeColmapPinhole(camera, model.sparse_dir)).first;
+  }
+  const ColmapPinhole& pinhole = it->second;
   view.image = UndistortColmapImage(view.image, pinhole);
   view.camera = ColmapImageCamera(image, pinhole);
   view.camera.Validate(image_path);
@@ -71,14 +82,17 @@ Dataset LoadColmapDataset(const DatasetRequest& request) {
   internal::ResolveViewNames(request, names, &neighbor_names);
   if (!request.load_neighbors) neighbor_names.clear();
 
-  // Every camera the loaded views use, converted once (the undistortion maps are shared).
+  // Every camera the loaded views use is converted once (the undistortion maps are shared), after
+  // its first image's size is checked against it (LoadColmapView). Its model is checked first,
+  // so that an unsupported model is the error whatever the images.
   std::map<std::uint32_t, ColmapPinhole> pinholes;
   std::vector<std::string> loaded = {request.reference};
   loaded.insert(loaded.end(), neighbor_names.begin(), neighbor_names.end());
   for (const std::string& name : loaded) {
-    const std::uint32_t id = model.FindImage(name)->camera_id;
-    if (!pinholes.count(id))
-      pinholes.emplace(id, MakeColmapPinhole(model.cameras.at(id), model.sparse_dir));
+    const ColmapCamera& camera = model.cameras.at(model.FindImage(name)->camera_id);
+    if (!IsSupportedColmapCameraModel(camera.model_name)) {
+      MakeColmapPinhole(camera, model.sparse_dir);  // throws, naming the model and the camera
+    }
   }
 
   Dataset dataset;
@@ -87,9 +101,10 @@ Dataset LoadColmapDataset(const DatasetRequest& request) {
   dataset.rectified = false;
   dataset.world_from_lidar.setIdentity();
   dataset.reference =
-      LoadColmapView(request.path, model, request.reference, pinholes, request.scale);
+      LoadColmapView(request.path, model, request.reference, &pinholes, request.scale);
   for (const auto& name : neighbor_names) {
-    dataset.neighbors.push_back(LoadColmapView(request.path, model, name, pinholes, request.scale));
+    dataset.neighbors.push_back(
+        LoadColmapView(request.path, model, name, &pinholes, request.scale));
   }
   const View& ref = dataset.reference;
   spdlog::info("colmap {}: reference {} + {} neighbours, {}x{}, camera model {}{}", request.path,

@@ -71,8 +71,11 @@ void ResolveViewNames(const DatasetRequest& request, const std::vector<std::stri
     }
   }
   if (neighbors->empty()) {
-    throw ConfigError(ViolatedConstraint(
-        "dataset.neighbors", "[]", "at least one view besides the reference in " + request.path));
+    // Only reached with no list given (all others, or `auto`): a listed neighbour is checked
+    // above. The message used to say "dataset.neighbors = []", a value the user never wrote.
+    throw ConfigError("dataset.neighbors: " + request.path +
+                      " has no view besides the reference '" + request.reference +
+                      "' (a depth map needs at least one neighbour view)");
   }
 }
 

@@ -212,6 +212,7 @@ Dataset LoadMiddleburyDataset(const DatasetRequest& request) {
   dataset.world_from_lidar.setIdentity();
 
   cv::Size full_size;
+  std::string reference_file;  // named in a size mismatch: which file the size came from
   double focal_px = 0.0;
   auto load_view = [&](const std::string& name) {
     const MiddleburyView& v = find_view(name);
@@ -221,11 +222,13 @@ Dataset LoadMiddleburyDataset(const DatasetRequest& request) {
     view.image = ReadColorImage(file);
     if (full_size.empty()) {
       full_size = view.image.size();
+      reference_file = v.file;
       focal_px = full_size.width;
     } else if (view.image.size() != full_size) {
       std::ostringstream s;
-      s << "image is " << view.image.cols << "x" << view.image.rows << ", the reference is "
-        << full_size.width << "x" << full_size.height << " (views of a rectified set must match)";
+      s << "image is " << view.image.cols << "x" << view.image.rows << ", the reference "
+        << reference_file << " is " << full_size.width << "x" << full_size.height
+        << " (views of a rectified set must match)";
       throw IoError(file, s.str());
     }
     constexpr double kBaselinePerView = 1.0;  // arbitrary unit: one view step

@@ -132,7 +132,7 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
   std::uintmax_t header_bytes = 0, needed = 0;
   bool first = true, done = false;
   if (ply) {
-    std::string format;
+    std::string format, element;
     // Per element: its count and the least bytes of one record.
     std::vector<std::pair<std::uintmax_t, std::uintmax_t>> elements;
     while (!done && header_bytes < (1u << 20) && std::getline(in, line)) {
@@ -147,16 +147,25 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
       } else if (key == "format") {
         words >> format;
       } else if (key == "element") {
-        std::string name;
         long double count = -1;
-        words >> name >> count;
-        if (!(count >= 0)) fail("element '" + name + "' has no valid count");
+        words >> element >> count;
+        if (!(count >= 0)) fail("element '" + element + "' has no valid count");
+        // 1e20 does not fit the integer (UBSan: found by fuzzing).
+        if (count >= 1.8e19L) {
+          fail("element '" + element + "' declares " + FormatNumber(static_cast<double>(count)) +
+               " records");
+        }
         elements.emplace_back(static_cast<std::uintmax_t>(count), 0);
       } else if (key == "property") {
         if (elements.empty()) fail("a property before any element");
         std::string type;
         words >> type;
         const bool ascii = format == "ascii";
+        if (type == "list" && element == "vertex") {
+          // PCL 1.13 aborts (assert) on a list property of the vertex element (found by
+          // fuzzing, tests/fuzz/ply_fuzzer.cc).
+          fail("a list property in element 'vertex' (only scalar vertex properties are read)");
+        }
         if (type == "list") {
           std::string count_type;
           words >> count_type;
@@ -173,6 +182,10 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
       fail("unknown format '" + format + "'");
     }
     for (const auto& [count, bytes] : elements) {
+      // Records of no property take no bytes, but PCL still loops over each.
+      if (bytes == 0 && count > file_bytes) {
+        fail("an element of no property declares " + std::to_string(count) + " records");
+      }
       if (bytes > 0 && count > file_bytes / bytes) {
         fail("its header declares " + std::to_string(count) + " records of at least " +
              std::to_string(bytes) + " bytes, more than the file's " + std::to_string(file_bytes) +
@@ -187,6 +200,9 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
     std::string data;
     while (!done && header_bytes < (1u << 20) && std::getline(in, line)) {
       header_bytes += line.size() + 1;
+      // A header line of only a carriage return made PCL 1.13 read through a null pointer (found
+      // by fuzzing); an empty line is harmless.
+      if (line == "\r") fail("a header line holding only a carriage return");
       if (!line.empty() && line.back() == '\r') line.pop_back();
       if (line.empty() || line[0] == '#') continue;
       std::istringstream words(line);
@@ -198,15 +214,31 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
         while (words >> v) values.push_back(v);
         for (const long double v2 : values) {
           if (!(v2 >= 0)) fail("negative " + key);
+          // 1e20 does not fit the integer (UBSan: found by fuzzing).
+          if (v2 >= 1.8e19L) fail(key + " " + FormatNumber(static_cast<double>(v2)));
         }
         if (values.empty()) fail("'" + key + "' without a value");
       }
       if (key == "VERSION" || key == "FIELDS" || key == "TYPE" || key == "VIEWPOINT") {
         // nothing to check
       } else if (key == "SIZE") {
-        for (const long double v : values) sizes.push_back(static_cast<std::uintmax_t>(v));
+        // PCL sizes each record from SIZE × COUNT, also for ASCII data, and allocates that for
+        // every point before reading any: a SIZE of 444444444444444 took 6 GB (found by fuzzing,
+        // tests/fuzz/pcd_fuzzer.cc). PCD types are 1, 2, 4 or 8 bytes.
+        for (const long double v : values) {
+          if (v != 1 && v != 2 && v != 4 && v != 8) {
+            fail("SIZE " + FormatNumber(static_cast<double>(v)) + " (expected 1, 2, 4 or 8)");
+          }
+          sizes.push_back(static_cast<std::uintmax_t>(v));
+        }
       } else if (key == "COUNT") {
-        for (const long double v : values) counts.push_back(static_cast<std::uintmax_t>(v));
+        for (const long double v : values) {
+          if (!(v >= 1 && v <= static_cast<long double>(file_bytes))) {
+            fail("COUNT " + FormatNumber(static_cast<double>(v)) + " (expected 1 to the file's " +
+                 std::to_string(file_bytes) + " bytes)");
+          }
+          counts.push_back(static_cast<std::uintmax_t>(v));
+        }
       } else if (key == "WIDTH") {
         width = static_cast<std::uintmax_t>(values[0]);
       } else if (key == "HEIGHT") {
@@ -227,13 +259,17 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
     }
     if (!done) fail("no 'DATA' line");
     if (sizes.empty()) fail("no 'SIZE' line");
-    if (!have_points) points = width * height;
+    if (!have_points) {
+      if (height != 0 && width > UINTMAX_MAX / height) fail("WIDTH × HEIGHT overflows");
+      points = width * height;
+    }
     std::uintmax_t record = 0;
     for (size_t i = 0; i < sizes.size(); ++i) {
       record += sizes[i] * (i < counts.size() ? counts[i] : 1);
     }
     if (data == "ascii") {
-      record = 2 * sizes.size();
+      record = 0;  // each value at least a digit and a separator
+      for (size_t i = 0; i < sizes.size(); ++i) record += 2 * (i < counts.size() ? counts[i] : 1);
     } else if (data == "binary_compressed") {
       record = 0;  // compressed: the size is not known from the header
     } else if (data != "binary") {
@@ -250,6 +286,49 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
     fail("the data its header declares (" + std::to_string(needed) + " bytes) is longer than the " +
          std::to_string(file_bytes - std::min(file_bytes, header_bytes)) +
          " bytes after the header (truncated?)");
+  }
+}
+
+// PCL can return a cloud whose sizes disagree with its data (found by fuzzing: a PCD header with
+// two FIELDS lines made pcl::fromPCLPointCloud2 index an empty cloud). Throws IoError unless every
+// field lies inside the point record and the data holds exactly width × height records.
+void CheckBlob(const std::string& path, const pcl::PCLPointCloud2& blob) {
+  auto fail = [&](const std::string& problem) {
+    throw IoError(path, "cannot read point cloud: inconsistent fields or sizes (" + problem + ")");
+  };
+  if (blob.point_step == 0) fail("empty point record");
+  const std::uint64_t points = static_cast<std::uint64_t>(blob.width) * blob.height;
+  if (blob.row_step != static_cast<std::uint64_t>(blob.width) * blob.point_step ||
+      blob.data.size() != points * blob.point_step) {
+    fail(std::to_string(blob.data.size()) + " bytes for " + std::to_string(points) + " points of " +
+         std::to_string(blob.point_step) + " bytes");
+  }
+  for (const pcl::PCLPointField& f : blob.fields) {
+    std::uint64_t bytes = 0;
+    switch (f.datatype) {
+      case pcl::PCLPointField::INT8:
+      case pcl::PCLPointField::UINT8:
+        bytes = 1;
+        break;
+      case pcl::PCLPointField::INT16:
+      case pcl::PCLPointField::UINT16:
+        bytes = 2;
+        break;
+      case pcl::PCLPointField::INT32:
+      case pcl::PCLPointField::UINT32:
+      case pcl::PCLPointField::FLOAT32:
+        bytes = 4;
+        break;
+      case pcl::PCLPointField::FLOAT64:
+        bytes = 8;
+        break;
+      default:
+        fail("field '" + f.name + "' of unknown type " + std::to_string(f.datatype));
+    }
+    if (f.count == 0 || f.offset + bytes * f.count > blob.point_step) {
+      fail("field '" + f.name + "' outside the " + std::to_string(blob.point_step) +
+           "-byte point record");
+    }
   }
 }
 
@@ -279,6 +358,11 @@ PointCloud ReadWithPcl(const std::string& path, bool ply) {
         std::any_of(blob.fields.begin(), blob.fields.end(),
                     [axis](const pcl::PCLPointField& f) { return f.name == axis; });
     if (!present) throw IoError(path, std::string("point cloud has no '") + axis + "' field");
+  }
+  CheckBlob(path, blob);
+  // pcl::fromPCLPointCloud2 takes &cloud[0] of an empty cloud (UBSan; found by fuzzing).
+  if (static_cast<std::uint64_t>(blob.width) * blob.height == 0) {
+    throw IoError(path, "point cloud is empty");
   }
   pcl::PointCloud<pcl::PointXYZ> xyz;
   pcl::fromPCLPointCloud2(blob, xyz);

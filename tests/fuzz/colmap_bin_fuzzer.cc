@@ -1,0 +1,27 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+// libFuzzer harness: io::ReadColmapModel on a sparse folder whose cameras.bin, images.bin and
+// points3D.bin are the fuzz input's three parts (fuzz::kSplit), then io::MakeColmapPinhole on each
+// camera of at most 4096x4096 px: the loader converts a camera only after reading an image of its
+// size, so a real image bounds it.
+#include "fuzz_util.h"
+#include "gcpstereo/io/colmap_io.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace gcpstereo;
+  const std::filesystem::path dir = fuzz::ScratchDir() / "sparse";
+  const std::vector<std::string_view> parts = fuzz::Split(fuzz::AsView(data, size), 3);
+  fuzz::WriteBytes(dir / "cameras.bin", parts[0]);
+  fuzz::WriteBytes(dir / "images.bin", parts[1]);
+  fuzz::WriteBytes(dir / "points3D.bin", parts[2]);
+  try {
+    const io::ColmapModel model = io::ReadColmapModel(dir.string());
+    for (const auto& [id, camera] : model.cameras) {
+      if (camera.width <= 4096 && camera.height <= 4096) {
+        io::MakeColmapPinhole(camera, model.sparse_dir);
+      }
+    }
+  } catch (const Error& e) {
+    fuzz::RequireNamed(e, dir.string());
+  }
+  return 0;
+}
