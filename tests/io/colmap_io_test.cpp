@@ -473,9 +473,9 @@ TEST(ColmapErrors, ImageOfAnotherSizeThanItsCamera) {
                     HasSubstr("image is 32x24 but its COLMAP camera 1 is 64x48")));
 }
 
-// A corrupt camera size (found with tests/fuzz/colmap_txt_fuzzer.cc): a distorting camera of
-// 100000x100000 px used to have its undistortion maps (80 GB) allocated before any image was
-// read. The image's size is now checked first: one line, no allocation.
+// A corrupt camera size (found with tests/fuzz/colmap_fuzzer.cc, the txt harness): a distorting
+// camera of 100000x100000 px used to have its undistortion maps (80 GB) allocated before any image
+// was read. The image's size is now checked first: one line, no allocation.
 TEST(ColmapErrors, HugeCameraIsRefusedBeforeItsMapsAreAllocated) {
   TestModel m = TinyModel();
   const std::string dir = WriteWorkspace(m, testing::MakeTempDir("colmap_huge"));
@@ -489,8 +489,9 @@ TEST(ColmapErrors, HugeCameraIsRefusedBeforeItsMapsAreAllocated) {
   request.path = dir;
   request.reference = "a.png";
   EXPECT_EQ(ErrorOf([&] { LoadDataset(request); }),
-            dir + "/images/a.png: image is 64x48 but its COLMAP camera 1 is 100000x100000 "
-                  "(resized images need a model of their size)");
+            dir +
+                "/images/a.png: image is 64x48 but its COLMAP camera 1 is 100000x100000 "
+                "(resized images need a model of their size)");
 }
 
 TEST(ColmapErrors, BrokenReferencesAndTextLines) {

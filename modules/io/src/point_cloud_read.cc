@@ -163,7 +163,7 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
         const bool ascii = format == "ascii";
         if (type == "list" && element == "vertex") {
           // PCL 1.13 aborts (assert) on a list property of the vertex element (found by
-          // fuzzing, tests/fuzz/ply_fuzzer.cc).
+          // fuzzing, tests/fuzz/point_cloud_fuzzer.cc, the ply harness).
           fail("a list property in element 'vertex' (only scalar vertex properties are read)");
         }
         if (type == "list") {
@@ -224,7 +224,7 @@ void CheckPointCloudHeader(const std::string& path, bool ply) {
       } else if (key == "SIZE") {
         // PCL sizes each record from SIZE × COUNT, also for ASCII data, and allocates that for
         // every point before reading any: a SIZE of 444444444444444 took 6 GB (found by fuzzing,
-        // tests/fuzz/pcd_fuzzer.cc). PCD types are 1, 2, 4 or 8 bytes.
+        // tests/fuzz/point_cloud_fuzzer.cc, the pcd harness). PCD types are 1, 2, 4 or 8 bytes.
         for (const long double v : values) {
           if (v != 1 && v != 2 && v != 4 && v != 8) {
             fail("SIZE " + FormatNumber(static_cast<double>(v)) + " (expected 1, 2, 4 or 8)");
