@@ -88,7 +88,13 @@ void OutputFolder::Commit() {
     if (std::find(written.begin(), written.end(), name) != written.end()) continue;
     std::error_code ec;
     const fs::path stale = fs::path(final_dir_) / name;
-    if (fs::is_regular_file(fs::symlink_status(stale, ec))) fs::remove(stale, ec);
+    // A folder (colmap/) goes whole: it was staged and committed as one output.
+    const fs::file_status status = fs::symlink_status(stale, ec);
+    if (fs::is_regular_file(status)) {
+      fs::remove(stale, ec);
+    } else if (fs::is_directory(status)) {
+      fs::remove_all(stale, ec);
+    }
   }
   // Each file moves by one rename: a run killed during these few milliseconds leaves every file
   // whole, the previous run's or this one's. The previous effective_config.yaml goes first and

@@ -525,6 +525,11 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("output.mesh", &output.mesh, {"write mesh.ply and mesh.obj (world coordinates)"});
   s->Add("output.points", &output.points,
          {"also write points.ply: one coloured 3D point per valid pixel (world coordinates)"});
+  s->Add("output.colmap", &output.colmap,
+         {"also write colmap/: a COLMAP dense workspace (images/, sparse/ as text, "
+          "stereo/depth_maps and normal_maps/*.geometric.bin, fusion.cfg, patch-match.cfg) "
+          "holding the depth maps, for colmap stereo_fusion and poisson_mesher; a scene's "
+          "OUT/colmap holds every view. strecha, colmap and kitti_raw (calibrated cameras)"});
 }
 
 void PipelineConfig::Check() const {
@@ -590,6 +595,12 @@ void PipelineConfig::Check() const {
                                          "depth or inverse_depth for calibrated (strecha, colmap) "
                                          "data; "
                                          "disparity needs rectified data"));
+  }
+  if (output.colmap && dataset.format == "middlebury") {
+    throw ConfigError(ViolatedConstraint(
+        "output.colmap", "true",
+        "false for middlebury (it publishes no camera calibration: its cameras and depths are in "
+        "arbitrary units, so a COLMAP workspace of them would not be the scene)"));
   }
   if (gcp.lidar_motion.mode != "off" && dataset.format != "kitti_raw") {
     throw ConfigError(ViolatedConstraint(

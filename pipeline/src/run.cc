@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "colmap_export.h"
 #include "gcpstereo/core/logging.h"
 #include "gcpstereo/core/system.h"
 #include "gcpstereo/io/atomic_file.h"
@@ -171,6 +172,29 @@ std::vector<std::string> WriteViewOutputs(OutputFolder& out, json& stages,
   return images;
 }
 
+// output.colmap (colmap_export.h): the reference's depth map — D̂ when the run stopped after the
+// propagation — with its neighbours' images and cameras as the source images, as a COLMAP
+// workspace in colmap/ (staged and committed whole with the other outputs). Timed as the
+// "colmap_export" stage; returns report.json's "colmap".
+json WriteColmapOutput(OutputFolder& out, json& stages, const PipelineConfig& options,
+                       const Dataset& dataset, const DepthMaps& result,
+                       const DepthMaps& propagated) {
+  const bool own = !result.depth.empty();
+  const cv::Mat& depth = own ? result.depth : propagated.depth;
+  if (depth.empty()) return nullptr;
+  StageClock clock(&stages, "colmap_export");
+  std::vector<ColmapExportView> views = {
+      {dataset.reference.name, dataset.reference.camera, dataset.reference.image, depth, {}}};
+  for (const View& neighbor : dataset.neighbors) {
+    views.front().sources.push_back(neighbor.name);
+    views.push_back({neighbor.name, neighbor.camera, neighbor.image, cv::Mat(), {}});
+  }
+  json summary = WriteColmapWorkspace(out.Path("colmap"), views, ColmapExportOptionsOf(options));
+  summary["depth"] = own ? "depth.pfm" : "propagated_depth.pfm";
+  clock.Done(summary);
+  return summary;
+}
+
 // The label map after the optimisation and the stages that refine it.
 struct OptimizedLabels {
   cv::Mat labels;
@@ -299,6 +323,10 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
   const std::vector<std::string> images = WriteViewOutputs(
       out, stages, options, dataset, labels,
       {result, propagated, gcps, mesh, optimized.previews, evaluation.previews}, &obj_export);
+  if (options.output.colmap) {
+    json colmap = WriteColmapOutput(out, stages, options, dataset, result, propagated);
+    if (!colmap.is_null()) report["colmap"] = std::move(colmap);
+  }
   return Finish(config, out, total, &report, images);
 }
 

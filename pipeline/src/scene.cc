@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include "colmap_export.h"
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
 #include "gcpstereo/core/progress.h"
@@ -226,6 +227,7 @@ struct FinishedView {
   View view;
   GroundTruth ground_truth;
   cv::Mat depth;
+  std::vector<std::string> neighbors;  // its run's dataset.neighbors (empty: all other views)
 };
 
 // Throws IoError naming the first of `files` missing from `dir`.
@@ -292,6 +294,7 @@ std::vector<FinishedView> LoadFinishedViews(const std::vector<std::string>& dirs
     v.name = d.reference;
     v.view = std::move(dataset.reference);
     v.ground_truth = std::move(dataset.ground_truth);
+    v.neighbors = d.neighbors;
     v.depth = io::ReadPfm((fs::path(dir) / depth_file).string());
     if (v.depth.size() != v.view.image.size()) {
       throw Error(dir + "/" + depth_file + ": " + std::to_string(v.depth.cols) + "x" +
@@ -433,6 +436,27 @@ void ModelPictures(const std::vector<FinishedView>& views, const TriangleMesh& m
     out->emplace_back("model_" + std::to_string(i + 1) + ".png",
                       mesh::RenderMeshPreview(mesh, view, o.mesh.preview));
   }
+}
+
+// output.colmap: every fused view's depth map (the fusion's input, `depth_file`) as one COLMAP
+// workspace in colmap/ (colmap_export.h), each view's source images its run's neighbours among
+// the fused views. Timed as the "colmap_export" stage; returns report.json's "colmap".
+json WriteSceneColmap(const std::vector<FinishedView>& views, const PipelineConfig& o,
+                      const std::string& depth_file, OutputFolder& out, json* stages) {
+  internal::StageClock clock(stages, "colmap_export");
+  std::vector<internal::ColmapExportView> inputs;
+  for (const FinishedView& v : views) {
+    std::vector<std::string> sources = v.neighbors;
+    if (sources.empty()) {
+      for (const FinishedView& other : views) sources.push_back(other.name);
+    }
+    inputs.push_back({v.name, v.view.camera, v.view.image, v.depth, sources});
+  }
+  json summary = internal::WriteColmapWorkspace(out.Path("colmap"), inputs,
+                                                internal::ColmapExportOptionsOf(o));
+  summary["depth"] = depth_file;
+  clock.Done(summary);
+  return summary;
 }
 
 std::string Escape(const std::string& text) {
@@ -653,6 +677,8 @@ json FuseMeshEvaluate(const std::vector<std::string>& view_dirs, const PipelineC
   }
   if (!metrics.empty()) report["metrics"] = metrics;
   evaluation.Done();
+
+  if (o.output.colmap) report["colmap"] = WriteSceneColmap(views, o, depth_file, out, &stages);
 
   if (o.output.previews) {
     internal::StageClock pictures(&stages, "pictures");

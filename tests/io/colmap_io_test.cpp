@@ -329,6 +329,58 @@ TEST(ColmapModel, TinyModelReadsTheSameFromTextAndBinary) {
   EXPECT_LT((b.center_world - Eigen::Vector3d(0.0, 0.1, 0.0)).norm(), 1e-12);
 }
 
+// WriteColmapModelText writes what both readers agree on, to the last bit, and refuses what the
+// reader would refuse.
+TEST(ColmapModel, TextWriterRoundTrip) {
+  const std::string dir = testing::MakeTempDir("colmap_write");
+  WriteModelBinary(TinyModel(), dir + "/bin");
+  ColmapModel model = ReadColmapModel(dir + "/bin");
+  // An image without keypoints and a distorting camera, too.
+  model.cameras[7] = {7, 4, "OPENCV", 64, 48, {70.1, 70.2, 31.9, 24.1, -0.1, 0.01, 1e-3, -2e-4}};
+  ColmapImage lone;
+  lone.image_id = 40;
+  lone.camera_id = 7;
+  lone.name = "d e.png";  // a blank inside a name is kept
+  lone.qvec_wxyz = Eigen::Vector4d(0.5, 0.5, -0.5, 0.5);
+  lone.tvec = Eigen::Vector3d(1.0 / 3.0, -2.0, 1e-17);
+  model.images[40] = lone;
+  fs::create_directories(dir + "/txt");
+  WriteColmapModelText(dir + "/txt", model);
+  const ColmapModel text = ReadColmapModel(dir + "/txt");
+  ExpectSameModel(model, text);
+  EXPECT_EQ(text.images.at(40).name, "d e.png");
+  EXPECT_TRUE(text.images.at(40).points2d.empty());
+  for (const auto& [id, image] : model.images) {
+    EXPECT_EQ(image.qvec_wxyz, text.images.at(id).qvec_wxyz) << id;  // exact
+    EXPECT_EQ(image.tvec, text.images.at(id).tvec) << id;
+  }
+  EXPECT_EQ(model.cameras.at(7).params, text.cameras.at(7).params);
+  // Written again: the same bytes.
+  fs::create_directories(dir + "/txt2");
+  WriteColmapModelText(dir + "/txt2", text);
+  for (const char* file : {"/cameras.txt", "/images.txt", "/points3D.txt"}) {
+    EXPECT_EQ(ReadBytes(dir + "/txt" + file), ReadBytes(dir + "/txt2" + file)) << file;
+  }
+  const std::string cameras_txt = ReadBytes(dir + "/txt/cameras.txt");
+  EXPECT_EQ(cameras_txt.substr(0, cameras_txt.find('\n')),
+            "# Camera list with one line of data per camera:");
+
+  ColmapModel bad_camera = model;
+  bad_camera.cameras[7].params.pop_back();
+  EXPECT_EQ(ErrorOf([&] { WriteColmapModelText(dir + "/txt", bad_camera); }),
+            dir + "/txt/cameras.txt: camera 7: model OPENCV has 8 parameters, given 7");
+  ColmapModel bad_name = model;
+  bad_name.images[40].name = "two\nlines.png";
+  EXPECT_THAT(ErrorOf([&] { WriteColmapModelText(dir + "/txt", bad_name); }),
+              HasSubstr(dir + "/txt/images.txt: image 40: the name"));
+  ColmapModel dangling = model;
+  dangling.images[40].camera_id = 99;
+  EXPECT_THAT(ErrorOf([&] { WriteColmapModelText(dir + "/txt", dangling); }),
+              HasSubstr("refers to camera 99, which the cameras file does not define"));
+  // The refused models left the files as they were.
+  EXPECT_EQ(ReadBytes(dir + "/txt/images.txt"), ReadBytes(dir + "/txt2/images.txt"));
+}
+
 TEST(ColmapModel, ImageWithoutKeypointsInText) {
   const std::string dir = testing::MakeTempDir("colmap_empty_line");
   TestModel m = TinyModel();

@@ -72,6 +72,23 @@ TEST(PipelineConfig, CrossKeyChecks) {
                  "dataset.format is kitti_raw (motion compensation needs the scan in the "
                  "scanner's own frame)");
   }
+  LoadedConfig colmap_of_middlebury;  // no calibration: no COLMAP workspace
+  try {
+    colmap_of_middlebury.Load("", {"dataset.format=middlebury", "dataset.path=/x",
+                                   "dataset.reference=im2", "output.colmap=true"});
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(),
+                 "output.colmap = true. Violated constraint: false for middlebury (it publishes "
+                 "no camera calibration: its cameras and depths are in arbitrary units, so a "
+                 "COLMAP workspace of them would not be the scene)");
+  }
+  for (const char* format : {"strecha", "colmap", "kitti_raw"}) {
+    LoadedConfig calibrated;
+    EXPECT_NO_THROW(calibrated.Load("", {std::string("dataset.format=") + format, "dataset.path=/x",
+                                         "dataset.reference=a", "output.colmap=true"}))
+        << format;
+  }
 }
 
 // Every choice the schema offers for an algorithm key passes the module's own check (the schema

@@ -77,6 +77,38 @@ TEST(OutputFolder, ReusedFolderHoldsOneRunsOutputs) {
   EXPECT_EQ(listed, "depth.pfm\n");
 }
 
+// A folder output (colmap/) is committed whole, replaced whole by the next run that writes it,
+// and removed by the next run that does not.
+TEST(OutputFolder, FolderOutputsAreCommittedAndReplacedWhole) {
+  const fs::path dir = fs::path(testing::MakeTempDir("gcpstereo-out")) / "run";
+  auto write_folder = [](OutputFolder& out, const char* file) {
+    const fs::path colmap = out.Path("colmap");
+    fs::create_directories(colmap / "stereo");
+    std::ofstream(colmap / "stereo" / file) << file;
+  };
+  {
+    OutputFolder out(dir.string());
+    write_folder(out, "first.bin");
+    EXPECT_FALSE(fs::exists(dir / "colmap"));
+    out.Commit();
+  }
+  EXPECT_TRUE(fs::exists(dir / "colmap" / "stereo" / "first.bin"));
+  {
+    OutputFolder out(dir.string());
+    write_folder(out, "second.bin");
+    out.Commit();
+  }
+  EXPECT_FALSE(fs::exists(dir / "colmap" / "stereo" / "first.bin"));
+  EXPECT_TRUE(fs::exists(dir / "colmap" / "stereo" / "second.bin"));
+  {
+    OutputFolder out(dir.string());
+    std::ofstream(out.Path("depth.pfm")) << "third";
+    out.Commit();
+  }
+  EXPECT_FALSE(fs::exists(dir / "colmap"));
+  EXPECT_TRUE(fs::exists(dir / "depth.pfm"));
+}
+
 // A run killed by a signal leaves its staging folder (no destructor runs); the next run into the
 // folder removes it, since its process is gone. A live process's folder is left alone.
 TEST(OutputFolder, StagingOfAKilledRunIsRemoved) {

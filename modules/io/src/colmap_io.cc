@@ -15,8 +15,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <iomanip>
 #include <limits>
+#include <locale>
 #include <sstream>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
@@ -608,6 +611,100 @@ Camera ColmapImageCamera(const ColmapImage& image, const ColmapPinhole& pinhole)
   camera.world_from_camera_rotation = image.CameraFromWorldRotation().transpose();
   camera.center_world = image.CenterWorld();
   return camera;
+}
+
+void WriteColmapModelText(const std::string& sparse_dir, const ColmapModel& model) {
+  const fs::path dir(sparse_dir);
+  const std::string cameras_file = (dir / "cameras.txt").string();
+  const std::string images_file = (dir / "images.txt").string();
+  const std::string points_file = (dir / "points3D.txt").string();
+  // What the reader would refuse is refused before anything is written.
+  for (const auto& [id, camera] : model.cameras) {
+    const ModelInfo* info = ModelByName(camera.model_name);
+    if (!info) {
+      throw IoError(cameras_file, "camera " + std::to_string(id) + ": unknown camera model '" +
+                                      camera.model_name + "'");
+    }
+    if (camera.params.size() != info->num_params) {
+      throw IoError(cameras_file, "camera " + std::to_string(id) + ": model " + camera.model_name +
+                                      " has " + std::to_string(info->num_params) +
+                                      " parameters, given " + std::to_string(camera.params.size()));
+    }
+  }
+  for (const auto& [id, image] : model.images) {
+    // The text reader takes the rest of the line, trimmed, as the name.
+    const std::string& name = image.name;
+    if (name.empty() || name.find_first_of("\r\n") != std::string::npos || name.front() == ' ' ||
+        name.front() == '\t' || name.back() == ' ' || name.back() == '\t') {
+      throw IoError(images_file, "image " + std::to_string(id) + ": the name '" + name +
+                                     "' cannot be written as text (empty, a line break, or "
+                                     "blanks at either end)");
+    }
+  }
+  CheckReferences(model, images_file, points_file);
+
+  auto stream = [] {
+    std::ostringstream s;
+    s.imbue(std::locale::classic());
+    s << std::setprecision(17);
+    return s;
+  };
+  std::ostringstream cameras = stream();
+  cameras << "# Camera list with one line of data per camera:\n"
+          << "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
+          << "# Number of cameras: " << model.cameras.size() << "\n";
+  for (const auto& [id, camera] : model.cameras) {
+    cameras << id << " " << camera.model_name << " " << camera.width << " " << camera.height;
+    for (double p : camera.params) cameras << " " << p;
+    cameras << "\n";
+  }
+  std::size_t observations = 0;
+  for (const auto& [id, image] : model.images) observations += image.points2d.size();
+  std::ostringstream images = stream();
+  images << "# Image list with two lines of data per image:\n"
+         << "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
+         << "#   POINTS2D[] as (X, Y, POINT3D_ID)\n"
+         << "# Number of images: " << model.images.size() << ", mean observations per image: "
+         << (model.images.empty() ? 0.0 : static_cast<double>(observations) / model.images.size())
+         << "\n";
+  for (const auto& [id, image] : model.images) {
+    images << id;
+    for (int k = 0; k < 4; ++k) images << " " << image.qvec_wxyz[k];
+    for (int k = 0; k < 3; ++k) images << " " << image.tvec[k];
+    images << " " << image.camera_id << " " << image.name << "\n";
+    for (std::size_t j = 0; j < image.points2d.size(); ++j) {
+      const ColmapPoint2D& point = image.points2d[j];
+      images << (j ? " " : "") << point.xy_colmap_px.x() << " " << point.xy_colmap_px.y() << " ";
+      if (point.HasPoint3D()) {
+        images << point.point3d_id;
+      } else {
+        images << "-1";
+      }
+    }
+    images << "\n";
+  }
+  std::size_t track_elements = 0;
+  for (const auto& [id, point] : model.points3d) track_elements += point.track.size();
+  std::ostringstream points = stream();
+  points << "# 3D point list with one line of data per point:\n"
+         << "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
+         << "# Number of points: " << model.points3d.size() << ", mean track length: "
+         << (model.points3d.empty() ? 0.0
+                                    : static_cast<double>(track_elements) / model.points3d.size())
+         << "\n";
+  for (const auto& [id, point] : model.points3d) {
+    points << id;
+    for (int k = 0; k < 3; ++k) points << " " << point.xyz_world[k];
+    for (int k = 0; k < 3; ++k) points << " " << static_cast<int>(point.rgb[k]);
+    points << " " << point.error_px;
+    for (const ColmapTrackElement& element : point.track) {
+      points << " " << element.image_id << " " << element.point2d_idx;
+    }
+    points << "\n";
+  }
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {cameras_file, cameras.str()}, {images_file, images.str()}, {points_file, points.str()}};
+  for (const auto& [path, text] : files) WriteBytesAtomically(path, text.data(), text.size());
 }
 
 std::string ColmapSparseDir(const std::string& workspace) {

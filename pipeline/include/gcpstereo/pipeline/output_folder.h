@@ -19,7 +19,8 @@ class OutputFolder {
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;
 
-  // Where to write the output file `name` now (inside the staging folder).
+  // Where to write the output file `name` now (inside the staging folder). `name` may also be a
+  // folder the caller creates there and fills (colmap/): it is committed, and replaced, whole.
   std::string Path(const std::string& name);
   // Where `name` will be after Commit().
   std::string FinalPath(const std::string& name) const;
@@ -28,7 +29,8 @@ class OutputFolder {
   // Moves every file written into the staging folder to its final name (replacing older files of
   // the same name) and removes the staging folder. The names committed are listed in the folder's
   // kManifestName; files the previous run listed there and this run did not write are removed
-  // first, so a folder reused with other options holds one run's outputs (other files are kept).
+  // first (files, and folders whole), so a folder reused with other options holds one run's
+  // outputs (other files are kept).
   void Commit();
 
   static constexpr const char* kManifestName = ".gcpstereo-outputs";

@@ -167,6 +167,8 @@ struct OutputOptions {
   bool previews = true;  // write the *.png previews and index.html
   bool mesh = true;      // write mesh.ply and mesh.obj
   bool points = false;   // also write points.ply (one coloured point per valid pixel)
+  // also write colmap/: a COLMAP dense workspace holding the depth maps (colmap_export.h)
+  bool colmap = false;
 };
 
 // Keys of the `mesh:` section.

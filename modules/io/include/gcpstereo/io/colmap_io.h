@@ -126,6 +126,15 @@ cv::Mat UndistortColmapImage(const cv::Mat& image, const ColmapPinhole& pinhole)
 // (world_from_camera_rotation = R(q)ᵀ, center_world = −R(q)ᵀ t).
 Camera ColmapImageCamera(const ColmapImage& image, const ColmapPinhole& pinhole);
 
+// Writes <sparse_dir>/cameras.txt, images.txt and points3D.txt in COLMAP's text format (the
+// format ReadColmapModel reads, with COLMAP's comment headers), each file atomically; numbers with
+// 17 significant digits, so a model read back is the same to the last bit; keypoints without a 3D
+// point as −1. `sparse_dir` must exist. Throws IoError naming the file for an I/O failure, and for
+// a model that ReadColmapModel would refuse: a camera whose model name or parameter count is not
+// COLMAP's, an image name that is empty, holds a line break or begins or ends with a blank, and
+// references to cameras, images, keypoints or 3D points that do not exist.
+void WriteColmapModelText(const std::string& sparse_dir, const ColmapModel& model);
+
 // <path>/sparse: the model folder of a workspace as `colmap image_undistorter` writes it.
 std::string ColmapSparseDir(const std::string& workspace);
 
