@@ -5,6 +5,7 @@
 #      in build-asan/ (GCPSTEREO_SANITIZE=ON, RelWithDebInfo so that it is not too slow and reports
 #      name the source line). Any sanitizer report fails the test that caused it: UBSan is built with
 #      -fno-sanitize-recover=undefined and halts, ASan and LSan exit non-zero.
+#      Each test may take 1800 s there instead of 600 (GCPSTEREO_TEST_TIMEOUT, CMakeLists.txt).
 #
 # Under the sanitizers the tests on the real data in ../shared/data are skipped (GCPSTEREO_DATA is
 # pointed at a missing folder, so they skip with their usual message): they run the same readers and
