@@ -19,5 +19,5 @@ function(gcpstereo_add_test module)
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} gcpstereo_test_support GTest::gtest)
   gtest_discover_tests(${target} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                       PROPERTIES LABELS ${module} TIMEOUT 600)
+                       PROPERTIES LABELS ${module} TIMEOUT ${GCPSTEREO_TEST_TIMEOUT})
 endfunction()
