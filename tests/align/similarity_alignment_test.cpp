@@ -152,9 +152,11 @@ std::vector<Eigen::Vector3d> ModelOf(const PointCloud& scan, const Similarity& w
   return model;
 }
 
-// Scale, rotation and translation come back to within what 2 mm of noise on ~3000 points over a
-// 4 m scene allows (measured: scale error 2e-4, rotation 0.01°); the median residual is the noise
-// seen from the 2 cm grid (about 2-5 mm).
+// Scale, rotation and translation come back to within what 2 mm of noise on ~2400 points over a
+// 4 m scene sampled every 2 cm allows (tolerances 0.2 % in scale, 2e-3 on the rotation matrix,
+// 2 cm in translation; measured: 0.37 and 40.00° to the 4 printed digits, median residual 3.0 mm,
+// 90th percentile 5.0 mm, every point an inlier). Before the point-to-plane steps, point-to-point
+// ICP stopped 0.35 % and 0.5° off here.
 TEST(AlignToScan, RecoversASimilarityFromAnyFrame) {
   const PointCloud scan = AsymmetricScene();
   const Similarity truth = TestSimilarity();
@@ -169,7 +171,9 @@ TEST(AlignToScan, RecoversASimilarityFromAnyFrame) {
 }
 
 // The model registered to a scan of another scene (a row of posts on a slope) is refused, with
-// its residuals.
+// its residuals. Measured: the registration shrinks the model onto the slope (scale 3e-18) where
+// every point lies within 3 mm of the scan: only the residual relative to the model's size
+// (dataset.align_max_relative_residual) catches it, as it is meant to.
 TEST(AlignToScan, ScanOfAnotherSceneIsRefused) {
   const PointCloud scene = AsymmetricScene();
   PointCloud other;

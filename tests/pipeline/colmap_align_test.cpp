@@ -184,7 +184,10 @@ TEST_F(ColmapAlign, AlignedRunGivesTheTrueFrameDepth) {
   EXPECT_FALSE(unaligned.contains("alignment"));
 }
 
-// A scan of which only a corner is left: most of the model has no scan near it.
+// A scan of which only a fifth is left (the points of least x): most of the model has no scan
+// near it. Measured: the registration fits part of the model to it at scale 0.62 with 69 % of the
+// points within 5 cm and a median residual of 2.4 cm, which the absolute thresholds let pass; the
+// median is 2.4 % of the model's size, and that refuses it.
 TEST_F(ColmapAlign, PoorOverlapIsRefusedWithTheResiduals) {
   const PointCloud laser = io::ReadPointCloud(*dir_ + "/strecha/gt/laser.ply");
   std::vector<float> xs;
@@ -255,9 +258,11 @@ TEST_F(ColmapAlign, ConfigurationErrors) {
 
 // A measurement, not a check run by default (writing the fountain preset takes minutes): with
 // GCPSTEREO_SYNTH_FOUNTAIN set to a folder `gcpstereo synth --preset fountain` wrote, its cameras
-// and every 20th laser point (1 cm of noise added: a triangulation's error) become a COLMAP model
-// in the frame of ModelFromWorld(), which is then aligned to gt/laser.ply and to the true camera
-// centres; the figures are printed.
+// and every 20th laser point (1 cm of noise added per axis: a triangulation's error) become a
+// COLMAP model in the frame of ModelFromWorld(), which is then aligned to gt/laser.ply and to the
+// true camera centres; the figures are printed (README, "COLMAP models"). Measured: scan, scale
+// error −0.018 %, rotation error 0.006°, camera centres within 2.6 mm, residuals median 11.7 mm,
+// 90th percentile 18.7 mm, RMS 13.1 mm, 100 % inliers, 25 s; centres exact.
 TEST(ColmapAlignMeasure, SyntheticFountain) {
   const char* fountain = std::getenv("GCPSTEREO_SYNTH_FOUNTAIN");
   if (!fountain) GTEST_SKIP() << "set GCPSTEREO_SYNTH_FOUNTAIN to a synthetic fountain folder";
@@ -272,21 +277,47 @@ TEST(ColmapAlignMeasure, SyntheticFountain) {
   }
   centres.close();
   for (const std::string& method : {"scan", "centres"}) {
+    std::vector<std::string> overrides = {
+        "dataset.format=colmap",
+        "dataset.path=" + dir + "/ws",
+        "dataset.reference=0005.png",
+        "dataset.neighbors=[0004.png]",
+        "gcp.sources=[]",
+        "gcp.lidar.path=" + std::string(fountain) + "/gt/laser.ply",
+        "dataset.align=" + method,
+        "runtime.stop_after=load",
+        "output.previews=false",
+        "runtime.log_level=warn"};
+    if (method == "centres") overrides.push_back("dataset.align_centres=" + dir + "/centres.txt");
     LoadedConfig config;
-    config.Load(
-        "", {"dataset.format=colmap", "dataset.path=" + dir + "/ws", "dataset.reference=0005.png",
-             "dataset.neighbors=[0004.png]", "gcp.sources=[]",
-             "gcp.lidar.path=" + std::string(fountain) + "/gt/laser.ply", "dataset.align=" + method,
-             method == "centres" ? "dataset.align_centres=" + dir + "/centres.txt"
-                                 : "dataset.align_centres=",
-             "runtime.stop_after=load", "output.previews=false", "runtime.log_level=warn"});
+    config.Load("", overrides);
     const json report =
         json::parse(RunPipeline(config, dir + "/out_" + method, "(test)").report_json);
     json a = report["alignment"];
     a.erase("centres");
+    Eigen::Matrix4d world_from_model;
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c)
+        world_from_model(r, c) = a["world_from_model"][r][c].get<double>();
+    }
+    // Where the aligned model puts each true camera centre, against the truth.
+    double worst_m = 0.0;
+    for (const std::string& name : io::ListDatasetViews("strecha", fountain)) {
+      const Eigen::Vector3d c =
+          io::ReadStrechaCamera(std::string(fountain) + "/cameras/" + name + ".png.camera")
+              .center_world;
+      const Eigen::Vector3d back =
+          (world_from_model * ModelFromWorld() * c.homogeneous()).head<3>();
+      worst_m = std::max(worst_m, (back - c).norm());
+    }
+    const Eigen::Matrix3d r = (world_from_model * ModelFromWorld()).topLeftCorner<3, 3>();
     std::cout << "synthetic fountain, align " << method << ": scale error "
-              << a["scale"].get<double>() * 0.37 - 1.0 << ", " << a.dump() << "\n";
-    ExpectInverseOfModelFromWorld(report["alignment"], 1e-2);
+              << a["scale"].get<double>() * 0.37 - 1.0 << ", rotation error "
+              << Eigen::AngleAxisd(r / std::cbrt(r.determinant())).angle() * 180.0 / kPi
+              << " deg, camera centres off by at most " << worst_m << " m; " << a.dump() << "\n";
+    // Bounds of what was measured (README): a measurement, not a test of the defaults.
+    EXPECT_NEAR(a["scale"].get<double>() * 0.37, 1.0, 0.01);
+    EXPECT_LT(worst_m, 0.2);
   }
 }
 

@@ -8,7 +8,9 @@
 //   - by registering the model's 3D points to a scan: coarse hypotheses from the two clouds'
 //     centroids, principal axes and spreads, each refined by a short trimmed, scale-aware ICP
 //     (nearest neighbours from PCL's k-d tree, Eigen::umeyama with scale), the best refined to
-//     convergence against the whole scan.
+//     convergence against the whole scan, last by point-to-plane steps with scale (Chen &
+//     Medioni, "Object modelling by registration of multiple range images", 1992), which do not
+//     stall along planes as point-to-point ICP does.
 // Neither decides alone whether the result is good enough: CheckAlignment refuses a poor one with
 // its residuals (a wrong frame must never pass silently).
 #pragma once
