@@ -276,7 +276,7 @@ TEST(ColmapAlignMeasure, SyntheticFountain) {
     centres << name << ".png " << c.center_world.transpose() << '\n';
   }
   centres.close();
-  for (const std::string& method : {"scan", "centres"}) {
+  for (const std::string& method : std::vector<std::string>{"scan", "centres"}) {
     std::vector<std::string> overrides = {
         "dataset.format=colmap",
         "dataset.path=" + dir + "/ws",
