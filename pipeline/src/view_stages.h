@@ -28,14 +28,11 @@
 namespace gcpstereo::pipeline::internal {
 
 // 1. The data set, checked against the options that depend on it (cost method, left-right check,
-// plane fit), a COLMAP model moved into the scan's frame first when dataset.align asks for it.
-// Throws ConfigError when the data set cannot serve the configuration, Error for a refused
-// alignment.
+// plane fit). Throws ConfigError when the data set cannot serve the configuration.
 struct LoadResult {
   Dataset dataset;
-  std::string cost_method;          // cost.method resolved: "birchfield_tomasi" or "plane_sweep"
-  nlohmann::json dataset_report;    // report["dataset"]
-  nlohmann::json alignment_report;  // report["alignment"] (dataset.align); null without one
+  std::string cost_method;        // cost.method resolved: "birchfield_tomasi" or "plane_sweep"
+  nlohmann::json dataset_report;  // report["dataset"]
   nlohmann::json stage_report = nlohmann::json::object();
 };
 LoadResult LoadStage(const PipelineConfig& options);
