@@ -18,7 +18,7 @@ BUILD="${FUZZ_BUILD_DIR:-$ROOT/build-fuzz}"
 CC="${CC:-clang-14}"
 CXX="${CXX:-clang++-14}"
 ALL_HARNESSES=(ply pcd kitti_bin pfm strecha_camera middlebury kitti_calibration kitti_timestamps
-               config colmap_bin colmap_txt oriented_cloud)
+               config colmap_bin colmap_txt oriented_cloud known_centres)
 if [[ $# -gt 0 ]]; then HARNESSES=("$@"); else HARNESSES=("${ALL_HARNESSES[@]}"); fi
 
 # Largest input per harness: a little above its largest seed, so that mutations stay in the

@@ -21,6 +21,7 @@
 #include "gcpstereo/io/point_cloud_io.h"
 #include "gcpstereo/pipeline/lidar_scan.h"
 #include "gcpstereo/pipeline/pipeline_config.h"
+#include "model_alignment.h"
 #include "stages.h"
 
 namespace fs = std::filesystem;
@@ -132,6 +133,8 @@ std::string RunEvaluation(const EvalRequest& r) {
     const PipelineConfig& o = config.options();
     io::DatasetRequest request{o.dataset.format, o.dataset.path, o.dataset.reference,
                                o.dataset.neighbors, o.dataset.scale};
+    // The cameras in the frame the run worked in (dataset.align).
+    request.world_from_model = internal::ModelAlignmentOf(o).world_from_model;
     dataset = io::LoadDataset(request);
     // The result and D̂, as far as the run wrote them (a run stopped after the propagation has
     // only D̂).

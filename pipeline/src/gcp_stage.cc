@@ -24,6 +24,7 @@
 #include "gcpstereo/io/pfm.h"
 #include "gcpstereo/io/point_cloud_io.h"
 #include "gcpstereo/pipeline/lidar_scan.h"
+#include "model_alignment.h"
 #include "stages.h"
 
 namespace gcpstereo::pipeline::internal {
@@ -108,12 +109,13 @@ cv::Mat ReadDepthMapSource(const DepthMapGcpOptions& options, const Dataset& dat
   return gcp::DisparityToDepth(values, dataset.disparity_numerator);
 }
 
-// The COLMAP model's 3D points that the reference image observes (its keypoints' point3D ids),
+// The COLMAP model's 3D points (in the aligned frame, dataset.align) that the reference image
+// observes (its keypoints' point3D ids),
 // each once, with its error, track length and the centres of the track's other images; with
 // `all`, every other point of the model too (observed = false).
-std::vector<gcp::SfmPoint> SfmPointsOfReference(const std::string& workspace,
+std::vector<gcp::SfmPoint> SfmPointsOfReference(const PipelineConfig& config,
                                                 const std::string& reference_name, bool all) {
-  const io::ColmapModel model = io::ReadColmapModel(io::ColmapSparseDir(workspace));
+  const io::ColmapModel model = ReadAlignedColmapModel(config);
   const io::ColmapImage* image = model.FindImage(reference_name);
   if (!image) {
     throw ConfigError("gcp.sources: sfm: the COLMAP model " + model.sparse_dir +
@@ -228,8 +230,8 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
       sets[index] = gcp::GcpsFromPointCloud(cloud, dataset.world_from_lidar, reference,
                                             config.gcp.lidar, &summary);
     } else if (source == "sfm") {
-      const std::vector<gcp::SfmPoint> points = SfmPointsOfReference(
-          config.dataset.path, dataset.reference.name, config.gcp.sfm.projected);
+      const std::vector<gcp::SfmPoint> points =
+          SfmPointsOfReference(config, dataset.reference.name, config.gcp.sfm.projected);
       sets[index] = gcp::GcpsFromSfmPoints(points, reference, config.dataset.scale, config.gcp.sfm,
                                            &summary, config.gcp.lidar);
       spdlog::info(

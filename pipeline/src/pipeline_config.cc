@@ -72,6 +72,39 @@ void PipelineConfig::Register(config::Schema* s) {
          {"dataset.neighbors: auto without scan points: reference pixels sampled every n", "px"});
   s->Add("dataset.scale", &dataset.scale, Range{0.0, 1.0, false, true},
          {"image scale before processing (fountain-P11 in the paper: 0.5)"});
+  s->Add("dataset.align", &dataset.align, {"none", "scan", "centres"},
+         {"colmap: put the model (arbitrary frame and scale) into a scan's frame by a similarity "
+          "(scale, rotation, translation) applied to every camera and 3D point on load: none = "
+          "the model's own frame; scan = registered to the scan gcp.lidar.path (its 3D points: "
+          "principal-axes hypotheses, then scale-aware trimmed ICP); centres = fitted (RANSAC, "
+          "Umeyama) to the known camera centres of dataset.align_centres. Depths, labels.min/max, "
+          "gcp.lidar.* and fusion distances are then in the scan's unit. A poor alignment is an "
+          "error giving its residuals (dataset.align_max_residual, ...)"});
+  s->Add("dataset.align_centres", &dataset.align_centres, {},
+         {"dataset.align: centres: a text file of known camera centres in the target frame, one "
+          "'<image name> X Y Z' per line (COLMAP model_aligner's convention; # comments); at "
+          "least 3 non-collinear centres of the model's images"});
+  s->Add("dataset.align_max_residual", &dataset.align_options.max_residual, Range::GreaterThan(0.0),
+         {"dataset.align: a model point within this of its nearest scan point (a camera centre "
+          "within this of its known position) is an inlier; the median residual must not exceed "
+          "it",
+          "m"});
+  s->Add("dataset.align_min_inlier_share", &dataset.align_options.min_inlier_share,
+         Range::Between(0.0, 1.0),
+         {"dataset.align: refuse the alignment when fewer model points (centres) are inliers"});
+  s->Add("dataset.align_max_relative_residual", &dataset.align_options.max_relative_residual,
+         Range{0.0, 1.0, false, true},
+         {"dataset.align: scan: refuse the alignment when the median residual exceeds this "
+          "fraction of the aligned model's spread (RMS distance of its points from their "
+          "centroid): a model shrunk onto a wrong scan fits in scan units, not relative to its "
+          "size"});
+  s->Add("dataset.align_ransac_iterations", &dataset.align_options.ransac_iterations,
+         Range::Between(1, 1000000),
+         {"dataset.align: centres: RANSAC samples of three centres (every triple when there are "
+          "fewer)"});
+  s->Add("dataset.align_max_model_points", &dataset.align_options.max_model_points,
+         Range::Between(3, 10000000),
+         {"dataset.align: scan: the model's 3D points registered, at most this many (every k-th)"});
 
   s->Add("labels.space", &labels.space, {"depth", "inverse_depth", "disparity"},
          {"spacing of the discrete hypotheses; disparity only for rectified data"});
@@ -79,8 +112,9 @@ void PipelineConfig::Register(config::Schema* s) {
          {"number of discrete hypotheses (paper: 360 depth levels); auto = one per pixel of "
           "disparity (labels.space disparity)"});
   s->Add("labels.min", &labels.min, Range::AtLeast(0.0),
-         {"lowest hypothesis in the space's unit (depth: data set unit; disparity: px in the "
-          "ground truth's convention); auto = from a range sensor's GCPs, else from the views' "
+         {"lowest hypothesis in the space's unit (depth: data set unit, the scan's after "
+          "dataset.align; disparity: px in the ground truth's convention); auto = from a range "
+          "sensor's GCPs, else from the views' "
           "matched disparities and stereo GCPs (disparity labels: 0), else the views' overlap"});
   s->Add("labels.max", &labels.max, Range::AtLeast(0.0),
          {"highest hypothesis; auto as labels.min"});
@@ -579,6 +613,29 @@ void PipelineConfig::Check() const {
                                          "auto alone, or a list of view names"));
   }
   dataset.neighbor_selection.Check();
+  dataset.align_options.Check();
+  if (dataset.align != "none" && dataset.format != "colmap") {
+    throw ConfigError(ViolatedConstraint(
+        "dataset.align", dataset.align,
+        "none unless dataset.format is colmap (only a COLMAP model lives in a frame of its own; "
+        "here: " +
+            dataset.format + ")"));
+  }
+  if (dataset.align == "scan" && gcp.lidar_path.empty()) {
+    throw ConfigError(
+        "dataset.align = scan needs the scan: set gcp.lidar.path (the point cloud in the target "
+        "frame)");
+  }
+  if (dataset.align == "centres" && dataset.align_centres.empty()) {
+    throw ConfigError(
+        "dataset.align = centres needs dataset.align_centres (a file of '<image name> X Y Z' "
+        "lines)");
+  }
+  if (dataset.align != "centres" && !dataset.align_centres.empty()) {
+    throw ConfigError(
+        ViolatedConstraint("dataset.align_centres", dataset.align_centres,
+                           "set only with dataset.align: centres (here: " + dataset.align + ")"));
+  }
   fusion.Check();
   scene_mesh.Check();
   if (labels.min && labels.max && !(*labels.min < *labels.max)) {

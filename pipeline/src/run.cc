@@ -252,6 +252,7 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
   const Dataset& dataset = load.dataset;
   const View& reference = dataset.reference;
   report["dataset"] = load.dataset_report;
+  if (!load.alignment_report.is_null()) report["alignment"] = load.alignment_report;
   if (!config.neighbor_selection().is_null()) {
     report["dataset"]["neighbor_selection"] = config.neighbor_selection();
   }

@@ -36,6 +36,7 @@
 #include "gcpstereo/mesh/render.h"
 #include "gcpstereo/mesh/surface_reconstruction.h"
 #include "gcpstereo/pipeline/output_folder.h"
+#include "model_alignment.h"
 #include "scene_internal.h"
 #include "stage_clock.h"
 #include "thread_limit.h"
@@ -95,6 +96,7 @@ SceneCameras LoadSceneCameras(const PipelineConfig& o) {
     request.reference = name;
     request.scale = o.dataset.scale;
     request.load_neighbors = false;
+    request.world_from_model = internal::ModelAlignmentOf(o).world_from_model;
     scene.cameras.push_back(io::LoadDataset(request).reference.camera);
   }
   return scene;
@@ -112,7 +114,7 @@ std::vector<Eigen::Vector3d> SelectionPoints(const PipelineConfig& o) {
     for (size_t i = 0; i < size; i += step) points.push_back(point_at(i));
   };
   if (o.dataset.format == "colmap") {
-    const io::ColmapModel model = io::ReadColmapModel(io::ColmapSparseDir(o.dataset.path));
+    const io::ColmapModel model = internal::ReadAlignedColmapModel(o);
     std::vector<Eigen::Vector3d> all;
     for (const auto& [id, point] : model.points3d) all.push_back(point.xyz_world);
     if (!all.empty()) {
@@ -288,6 +290,8 @@ std::vector<FinishedView> LoadFinishedViews(const std::vector<std::string>& dirs
     request.reference = d.reference;
     request.scale = d.scale;
     request.load_neighbors = false;
+    // The cameras in the frame the view's depth map was computed in (dataset.align).
+    request.world_from_model = internal::ModelAlignmentOf(config.options()).world_from_model;
     Dataset dataset = io::LoadDataset(request);
     FinishedView v;
     v.dir = dir;
@@ -844,6 +848,9 @@ RunSummary RunScene(const LoadedConfig& config, const std::string& output_dir,
 
   const std::vector<std::string> names = SceneReferenceNames(o);
   spdlog::info("scene of {} views: {}", names.size(), FlowList(names));
+  // dataset.align once for the scene (a refused alignment stops it here, not in every view).
+  const internal::ModelAlignment alignment = internal::ModelAlignmentOf(o);
+  if (alignment.active) report["alignment"] = alignment.report;
   internal::StageClock selection_stage(&stages, "view_selection");
   std::optional<SceneCameras> cameras;
   std::vector<Eigen::Vector3d> points;

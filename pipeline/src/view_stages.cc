@@ -13,6 +13,7 @@
 #include "gcpstereo/io/dataset_io.h"
 #include "gcpstereo/io/point_cloud_io.h"
 #include "gcpstereo/mesh/render.h"
+#include "model_alignment.h"
 #include "view_stages.h"
 
 namespace gcpstereo::pipeline::internal {
@@ -201,6 +202,9 @@ LoadResult LoadStage(const PipelineConfig& options) {
   request.neighbors = options.dataset.neighbors;
   request.scale = options.dataset.scale;
   LoadResult result;
+  const ModelAlignment alignment = ModelAlignmentOf(options);
+  request.world_from_model = alignment.world_from_model;
+  result.alignment_report = alignment.report;
   result.dataset = io::LoadDataset(request);
   const Dataset& dataset = result.dataset;
   const View& reference = dataset.reference;

@@ -28,11 +28,14 @@
 namespace gcpstereo::pipeline::internal {
 
 // 1. The data set, checked against the options that depend on it (cost method, left-right check,
-// plane fit). Throws ConfigError when the data set cannot serve the configuration.
+// plane fit), a COLMAP model moved into the scan's frame first when dataset.align asks for it.
+// Throws ConfigError when the data set cannot serve the configuration, Error for a refused
+// alignment.
 struct LoadResult {
   Dataset dataset;
-  std::string cost_method;        // cost.method resolved: "birchfield_tomasi" or "plane_sweep"
-  nlohmann::json dataset_report;  // report["dataset"]
+  std::string cost_method;          // cost.method resolved: "birchfield_tomasi" or "plane_sweep"
+  nlohmann::json dataset_report;    // report["dataset"]
+  nlohmann::json alignment_report;  // report["alignment"] (dataset.align); null without one
   nlohmann::json stage_report = nlohmann::json::object();
 };
 LoadResult LoadStage(const PipelineConfig& options);

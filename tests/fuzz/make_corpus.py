@@ -54,6 +54,8 @@ def seeds():
     }
     s["strecha_camera"] = {"0000.png.camera": (
         b"100 0 15.5\n0 100 11.5\n0 0 1\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n0.5 -0.25 2\n32 24\n")}
+    s["known_centres"] = {"centres.txt": (
+        b"# name X Y Z\n0004.jpg 1.5 -2.25 0.5\n0005.jpg 2 -2 0.5\nsub/0006.jpg 2.5 -1.75 0.625\n")}
     s["middlebury"] = {
         "disp2_pgm": b"\x00P5\n8 6\n255\n" + bytes([12] * 48),
         "disp2_png": b"\x01" + png(8, 6, 1, [12]),

@@ -282,6 +282,48 @@ TEST_F(BadInput, FuseOfAViewWithoutDepthMap) {
                     ": not found: the folder is not a finished per-view run of gcpstereo");
 }
 
+TEST_F(BadInput, AlignmentOfAModelThatIsNotColmap) {
+  ExpectRefused("run " + Config() + " --set dataset.align=scan", "out_align_strecha",
+                "dataset.align = scan. Violated constraint: none unless dataset.format is colmap "
+                "(only a COLMAP model lives in a frame of its own; here: strecha)");
+}
+
+TEST_F(BadInput, AlignmentToCentresWithoutTheirFile) {
+  const fs::path ws = ColmapWorkspace("colmap_align_nofile");
+  ExpectRefused("run " + ColmapConfig(ws) + " --set dataset.align=centres", "out_align_nofile",
+                "dataset.align = centres needs dataset.align_centres (a file of '<image name> X "
+                "Y Z' lines)");
+}
+
+TEST_F(BadInput, AlignmentCentresNamingAnImageTheModelLacks) {
+  const fs::path ws = ColmapWorkspace("colmap_align_name");
+  const std::string centres =
+      WriteFile(*dir_ / "centres_name.txt", "0005.png 0 0 0\n0006.png 0.1 0 0\n0099.png 1 2 3\n");
+  ExpectRefused("run " + ColmapConfig(ws) + " --set dataset.align=centres" +
+                    " --set dataset.align_centres=" + centres,
+                "out_align_name",
+                "dataset.align_centres: " + centres +
+                    " names image '0099.png', which the COLMAP model " + (ws / "sparse").string() +
+                    " does not have (its images: 0005.png, 0006.png)");
+}
+
+TEST_F(BadInput, AlignmentCentresWithANonNumericCoordinate) {
+  const fs::path ws = ColmapWorkspace("colmap_align_value");
+  const std::string centres =
+      WriteFile(*dir_ / "centres_value.txt", "0005.png 0 0 0\n0006.png 0.1 0 zero\n");
+  ExpectRefused("run " + ColmapConfig(ws) + " --set dataset.align=centres" +
+                    " --set dataset.align_centres=" + centres,
+                "out_align_value", centres + ": line 2: 'zero' is not a finite coordinate");
+}
+
+TEST_F(BadInput, ColmapOutputOfMiddlebury) {
+  ExpectRefused("run " + Config() + " --set dataset.format=middlebury --set output.colmap=true",
+                "out_colmap_output",
+                "output.colmap = true. Violated constraint: false for middlebury (it publishes no "
+                "camera calibration: its cameras and depths are in arbitrary units, so a COLMAP "
+                "workspace of them would not be the scene)");
+}
+
 // ---- COLMAP workspaces -------------------------------------------------------------------------
 
 TEST_F(BadInput, ColmapWithoutCamerasFile) {

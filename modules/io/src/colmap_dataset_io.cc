@@ -75,7 +75,10 @@ std::vector<std::string> ColmapViewNames(const std::string& path) {
 
 Dataset LoadColmapDataset(const DatasetRequest& request) {
   internal::CheckRequest(request);
-  const ColmapModel model = ReadColmapModel(ColmapSparseDir(request.path));
+  ColmapModel model = ReadColmapModel(ColmapSparseDir(request.path));
+  if (!request.world_from_model.isIdentity(0.0)) {
+    TransformColmapModel(request.world_from_model, &model);
+  }
   const std::vector<std::string> names = model.ImageNames();
   if (names.empty()) throw IoError(model.sparse_dir, "the COLMAP model has no registered images");
   std::vector<std::string> neighbor_names;

@@ -15,9 +15,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <locale>
+#include <set>
 #include <sstream>
 #include <utility>
 
@@ -709,6 +711,74 @@ void WriteColmapModelText(const std::string& sparse_dir, const ColmapModel& mode
 
 std::string ColmapSparseDir(const std::string& workspace) {
   return (fs::path(workspace) / "sparse").string();
+}
+
+void TransformColmapModel(const Eigen::Matrix4d& world_from_model, ColmapModel* model) {
+  const Eigen::Matrix3d sr = world_from_model.topLeftCorner<3, 3>();
+  const double scale = std::cbrt(sr.determinant());
+  const Eigen::Matrix3d rotation = scale > 0.0 ? Eigen::Matrix3d(sr / scale) : sr;
+  const Eigen::Vector3d translation = world_from_model.topRightCorner<3, 1>();
+  if (!world_from_model.allFinite() || !(scale > 0.0) ||
+      (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
+      !world_from_model.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1))) {
+    throw Error("TransformColmapModel: not a similarity transform [sR t; 0 1]");
+  }
+  for (auto& [id, point] : model->points3d) {
+    point.xyz_world = scale * (rotation * point.xyz_world) + translation;
+  }
+  for (auto& [id, image] : model->images) {
+    const Eigen::Matrix3d camera_from_world =
+        image.CameraFromWorldRotation() * rotation.transpose();
+    image.tvec = scale * image.tvec - camera_from_world * translation;
+    const Eigen::Quaterniond q(camera_from_world);
+    image.qvec_wxyz = Eigen::Vector4d(q.w(), q.x(), q.y(), q.z());
+  }
+}
+
+std::vector<KnownCentre> ReadKnownCentres(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw IoError(path, "cannot open the camera centres file");
+  std::vector<KnownCentre> centres;
+  std::set<std::string> names;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    // The last three fields are the coordinates, everything before them the name.
+    std::vector<std::string> fields;
+    std::istringstream split(line);
+    for (std::string field; split >> field;) fields.push_back(field);
+    const std::string where = "line " + std::to_string(number) + ": ";
+    if (fields.size() < 4) {
+      throw IoError(path, where + "expected '<image name> X Y Z', got '" + line + "'");
+    }
+    KnownCentre centre;
+    for (int k = 0; k < 3; ++k) {
+      const std::string& text = fields[fields.size() - 3 + k];
+      char* end = nullptr;
+      errno = 0;
+      const double value = std::strtod(text.c_str(), &end);
+      if (end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(value)) {
+        throw IoError(path, where + "'" + text + "' is not a finite coordinate");
+      }
+      centre.center_world[k] = value;
+    }
+    // The name as written (inner spaces kept), without the coordinates' fields.
+    size_t end_of_name = line.size();
+    for (int k = 0; k < 3; ++k) {
+      end_of_name = line.find_last_not_of(" \t", end_of_name - 1);
+      end_of_name = line.find_last_of(" \t", end_of_name);
+    }
+    const size_t name_end = line.find_last_not_of(" \t", end_of_name);
+    centre.name = line.substr(first, name_end - first + 1);
+    if (!names.insert(centre.name).second) {
+      throw IoError(path, where + "image '" + centre.name + "' is listed twice");
+    }
+    centres.push_back(std::move(centre));
+  }
+  if (centres.empty()) throw IoError(path, "no camera centre in the file");
+  return centres;
 }
 
 }  // namespace gcpstereo::io

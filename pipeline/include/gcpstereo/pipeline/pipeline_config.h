@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gcpstereo/align/similarity_alignment.h"
 #include "gcpstereo/config/schema.h"
 #include "gcpstereo/cost/birchfield_tomasi.h"
 #include "gcpstereo/cost/label_range.h"
@@ -44,6 +45,13 @@ struct DatasetOptions {
   cost::ViewSelectionOptions
       neighbor_selection;  // dataset.neighbor_count, dataset.neighbor_selection.*
   double scale = 1.0;      // image scale before processing, (0, 1]
+  // dataset.align (colmap only): none = the model's own frame; scan = the similarity registering
+  // the model's 3D points to the scan gcp.lidar.path; centres = the similarity fitted to the
+  // known camera centres of dataset.align_centres. Every camera and 3D point is moved by it on
+  // load (pipeline/src/model_alignment.h).
+  std::string align = "none";
+  std::string align_centres;              // dataset.align_centres: "<image name> X Y Z" lines
+  align::AlignmentOptions align_options;  // dataset.align_max_residual, ..._min_inlier_share, ...
 
   bool AutoNeighbors() const { return neighbors.size() == 1 && neighbors.front() == "auto"; }
   // More than one reference, or `all`.

@@ -138,4 +138,22 @@ void WriteColmapModelText(const std::string& sparse_dir, const ColmapModel& mode
 // <path>/sparse: the model folder of a workspace as `colmap image_undistorter` writes it.
 std::string ColmapSparseDir(const std::string& workspace);
 
+// Moves a model into another frame, x_world = M x_model for a similarity M = [sR t; 0 1]
+// (world_from_model, e.g. the result of dataset.align): every 3D point, and every image's pose so
+// that its camera keeps its intrinsics and sees the same image (camera_from_world R' = R Rᵀ_M,
+// t' = s t − R' t_M: the camera frame scales with the world, so depths scale by s). Throws Error
+// unless M is a similarity (s > 0, R a rotation within 1e-6, last row 0 0 0 1).
+void TransformColmapModel(const Eigen::Matrix4d& world_from_model, ColmapModel* model);
+
+// Known camera centres in COLMAP model_aligner's convention: one "<image name> X Y Z" per line
+// (the name may contain spaces: the last three fields are the coordinates); empty lines and lines
+// starting with # are skipped. Returned in the file's order. Throws IoError naming the file and
+// line for a malformed line, a non-finite coordinate or a name listed twice, and for a file
+// without any centre.
+struct KnownCentre {
+  std::string name;
+  Eigen::Vector3d center_world = Eigen::Vector3d::Zero();
+};
+std::vector<KnownCentre> ReadKnownCentres(const std::string& path);
+
 }  // namespace gcpstereo::io

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "gcpstereo/core/types.h"
 
 namespace gcpstereo::io {
@@ -19,6 +21,10 @@ struct DatasetRequest {
   // false: the reference view (and its ground truth) only, `neighbors` ignored (strecha and
   // middlebury; kitti_raw always loads its pair): what a scene's fusion needs of each view.
   bool load_neighbors = true;
+  // colmap only: the similarity [sR t; 0 1] that moves the model into the world frame
+  // (TransformColmapModel) before its cameras are made; identity = the model's own frame
+  // (dataset.align: none). Ignored by the other formats.
+  Eigen::Matrix4d world_from_model = Eigen::Matrix4d::Identity();
 };
 
 // Loads a data set; throws IoError / Error naming the file and the problem for anything missing or
@@ -41,7 +47,8 @@ struct DatasetRequest {
 //             FULL_OPENCV images are undistorted on load (View::undistorted,
 //             View::source_camera_model); any other model is an error naming it and the camera
 //             id. Each image must have its camera's size. Scale as for strecha; no ground truth.
-//             rectified = false, world_from_lidar = I (the model's frame is the world frame).
+//             rectified = false, world_from_lidar = I: the world frame is the model's, moved by
+//             request.world_from_model (a scan's frame when dataset.align placed it there).
 Dataset LoadDataset(const DatasetRequest& request);
 
 // The individual loaders (LoadDataset dispatches to them).

@@ -1,0 +1,665 @@
+// Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
+#include "gcpstereo/align/similarity_alignment.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <utility>
+
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+
+#include "gcpstereo/core/error.h"
+
+namespace gcpstereo::align {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+using PclCloud = pcl::PointCloud<pcl::PointXYZ>;
+
+// Scan registration constants (not keys: they shape the search, not the acceptance).
+constexpr size_t kCoarseModelPoints = 400;   // model points of each coarse hypothesis's ICP
+constexpr size_t kCoarseScanPoints = 20000;  // scan points the coarse hypotheses are scored on
+constexpr int kCoarseIterations = 10;        // ICP iterations per coarse hypothesis
+constexpr double kCoarseKeep = 0.6;          // coarse ICP: the closest 60 % of the pairs
+constexpr double kFineKeep = 0.7;            // final ICP: at least the closest 70 %
+constexpr size_t kFineSubsetPoints = 2000;   // final ICP, first on this many model points
+constexpr int kPlaneIterations = 30;         // final point-to-plane steps
+constexpr int kMaxFineIterations = 300;      // per stage of the final ICP
+constexpr std::array<double, 5> kScaleFactors = {0.35, 0.5, 0.7, 1.0, 1.4};  // × spreads' ratio
+constexpr int kCoarseRounds = 3;  // coarse searches, each on the scan part the last one covered
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The q-quantile (nearest rank) of `values` (not empty).
+double Quantile(std::vector<double> values, double q) {
+  const size_t n = values.size();
+  const size_t rank = std::min(
+      n - 1, static_cast<size_t>(std::max(0.0, std::ceil(q * static_cast<double>(n)) - 1.0)));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(rank),
+                   values.end());
+  return values[rank];
+}
+
+// Every k-th element, at most `max_count` of them.
+template <typename T>
+std::vector<T> EveryKth(const std::vector<T>& all, size_t max_count) {
+  if (all.size() <= max_count) return all;
+  const size_t step = (all.size() + max_count - 1) / max_count;
+  std::vector<T> kept;
+  for (size_t i = 0; i < all.size(); i += step) kept.push_back(all[i]);
+  return kept;
+}
+
+// The similarity in a 4×4 matrix, without the checks of FromMatrix (a degenerate sample's fit
+// is rejected by its caller).
+Similarity Decompose(const Eigen::Matrix4d& m) {
+  Similarity s;
+  const Eigen::Matrix3d sr = m.topLeftCorner<3, 3>();
+  s.scale = std::sqrt((sr.transpose() * sr).trace() / 3.0);
+  s.rotation = s.scale > 0.0 ? Eigen::Matrix3d(sr / s.scale) : Eigen::Matrix3d::Identity();
+  s.translation = m.topRightCorner<3, 1>();
+  return s;
+}
+
+bool IsValid(const Similarity& s) {
+  return std::isfinite(s.scale) && s.scale > 0.0 && s.rotation.allFinite() &&
+         s.translation.allFinite() && s.rotation.determinant() > 0.5;
+}
+
+Similarity FitSimilarity(const std::vector<Eigen::Vector3d>& model,
+                         const std::vector<Eigen::Vector3d>& world, const std::vector<int>& which) {
+  Eigen::Matrix3Xd src(3, which.size()), dst(3, which.size());
+  for (size_t i = 0; i < which.size(); ++i) {
+    src.col(static_cast<Eigen::Index>(i)) = model[which[i]];
+    dst.col(static_cast<Eigen::Index>(i)) = world[which[i]];
+  }
+  return Decompose(Eigen::umeyama(src, dst, /*with_scaling=*/true));
+}
+
+// σ₂ / σ₁ of the centred points: 0 for collinear points.
+double NonCollinearity(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& which) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i : which) mean += points[i];
+  mean /= static_cast<double>(which.size());
+  Eigen::Matrix3Xd centred(3, which.size());
+  for (size_t i = 0; i < which.size(); ++i) {
+    centred.col(static_cast<Eigen::Index>(i)) = points[which[i]] - mean;
+  }
+  const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::Matrix3Xd>(centred).singularValues();
+  return sv(0) > 0.0 ? sv(1) / sv(0) : 0.0;
+}
+
+// Residual statistics of `residuals` (world units) and the aligned points' spread.
+void FillStatistics(const std::vector<double>& residuals,
+                    const std::vector<Eigen::Vector3d>& aligned, double max_residual,
+                    AlignmentResult* result) {
+  result->num_correspondences = static_cast<int>(residuals.size());
+  result->num_inliers = static_cast<int>(std::count_if(
+      residuals.begin(), residuals.end(), [max_residual](double r) { return r <= max_residual; }));
+  result->inlier_share = residuals.empty() ? 0.0
+                                           : static_cast<double>(result->num_inliers) /
+                                                 static_cast<double>(residuals.size());
+  result->median_residual = Quantile(residuals, 0.5);
+  result->p90_residual = Quantile(residuals, 0.9);
+  double sum2 = 0.0;
+  for (double r : residuals) sum2 += r * r;
+  result->rms_residual = std::sqrt(sum2 / static_cast<double>(residuals.size()));
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : aligned) mean += p;
+  mean /= static_cast<double>(aligned.size());
+  double spread2 = 0.0;
+  for (const Eigen::Vector3d& p : aligned) spread2 += (p - mean).squaredNorm();
+  result->model_spread = std::sqrt(spread2 / static_cast<double>(aligned.size()));
+  result->relative_median_residual = result->model_spread > 0.0
+                                         ? result->median_residual / result->model_spread
+                                         : std::numeric_limits<double>::infinity();
+}
+
+// ---- Registration to a scan ---------------------------------------------------------------
+
+// A scan as PCL's k-d tree sees it.
+class ScanIndex {
+ public:
+  explicit ScanIndex(PclCloud::Ptr cloud) : cloud_(std::move(cloud)) {
+    tree_.setInputCloud(cloud_);
+  }
+  // The nearest scan point to `x` and its distance.
+  double Nearest(const Eigen::Vector3d& x, Eigen::Vector3d* nearest) const {
+    const pcl::PointXYZ query(static_cast<float>(x.x()), static_cast<float>(x.y()),
+                              static_cast<float>(x.z()));
+    if (tree_.nearestKSearch(query, 1, index_, distance2_) != 1) {
+      return std::numeric_limits<double>::infinity();
+    }
+    const pcl::PointXYZ& p = (*cloud_)[index_[0]];
+    *nearest = Eigen::Vector3d(p.x, p.y, p.z);
+    return (*nearest - x).norm();
+  }
+  const PclCloud& cloud() const { return *cloud_; }
+
+  // The nearest scan point's index (-1 when none).
+  int NearestIndex(const Eigen::Vector3d& x) const {
+    const pcl::PointXYZ query(static_cast<float>(x.x()), static_cast<float>(x.y()),
+                              static_cast<float>(x.z()));
+    return tree_.nearestKSearch(query, 1, index_, distance2_) == 1 ? index_[0] : -1;
+  }
+  Eigen::Vector3d Point(int i) const {
+    const pcl::PointXYZ& p = (*cloud_)[i];
+    return Eigen::Vector3d(p.x, p.y, p.z);
+  }
+  // The scan's surface normal at point i: the least principal axis of its kNormalNeighbours
+  // nearest points (computed once per point, when first asked); zero where they are collinear.
+  Eigen::Vector3d Normal(int i) const {
+    if (normals_.empty()) normals_.assign(cloud_->size(), Eigen::Vector3f::Constant(NAN));
+    Eigen::Vector3f& n = normals_[i];
+    if (std::isnan(n.x())) {
+      std::vector<int> neighbours;
+      std::vector<float> distances;
+      tree_.nearestKSearch((*cloud_)[i], kNormalNeighbours, neighbours, distances);
+      std::vector<Eigen::Vector3d> points;
+      for (int k : neighbours) points.push_back(Point(k));
+      n.setZero();
+      if (points.size() >= 3) {
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (const auto& p : points) mean += p;
+        mean /= static_cast<double>(points.size());
+        Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+        for (const auto& p : points) covariance += (p - mean) * (p - mean).transpose();
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+        if (eigen.eigenvalues()(1) > 1e-12 * eigen.eigenvalues()(2)) {
+          n = eigen.eigenvectors().col(0).cast<float>();
+        }
+      }
+    }
+    return n.cast<double>();
+  }
+
+ private:
+  static constexpr int kNormalNeighbours = 12;
+  PclCloud::Ptr cloud_;
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree_;
+  mutable std::vector<int> index_ = std::vector<int>(1);
+  mutable std::vector<float> distance2_ = std::vector<float>(1);
+  mutable std::vector<Eigen::Vector3f> normals_;
+};
+
+// One point-to-plane step (Chen & Medioni 1992) with scale: the small update
+// x -> (1 + σ)(x + ω × x) + τ minimising Σ (n · (x' − q))² over the pairs within `limit`
+// (q the nearest scan point, n the scan's normal there), linearised and solved by least squares,
+// then composed with `s`. Point-to-point ICP slides slowly along planes and stops short (a degree
+// off on the synthetic fountain); the plane distances converge in a few steps.
+Similarity PlaneStep(const std::vector<Eigen::Vector3d>& model, const ScanIndex& scan,
+                     const Similarity& s, double limit) {
+  Eigen::Matrix<double, 7, 7> normal_matrix = Eigen::Matrix<double, 7, 7>::Zero();
+  Eigen::Matrix<double, 7, 1> rhs = Eigen::Matrix<double, 7, 1>::Zero();
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const auto& p : model) centre += s.Apply(p);
+  centre /= static_cast<double>(model.size());
+  int used = 0;
+  for (const Eigen::Vector3d& p : model) {
+    const Eigen::Vector3d x = s.Apply(p) - centre;  // about the centre: a better-conditioned σ
+    const int i = scan.NearestIndex(x + centre);
+    if (i < 0) continue;
+    const Eigen::Vector3d q = scan.Point(i) - centre;
+    if ((q - x).norm() > limit) continue;
+    const Eigen::Vector3d n = scan.Normal(i);
+    if (n.isZero()) continue;
+    Eigen::Matrix<double, 7, 1> row;
+    row << x.cross(n), n, n.dot(x);  // ω, τ, σ
+    const double r = n.dot(q - x);
+    normal_matrix += row * row.transpose();
+    rhs += row * r;
+    ++used;
+  }
+  if (used < 7) return s;
+  const Eigen::Matrix<double, 7, 1> d = normal_matrix.ldlt().solve(rhs);
+  if (!d.allFinite()) return s;
+  const Eigen::Vector3d omega = d.head<3>();
+  const Eigen::Matrix3d r =
+      omega.norm() > 0.0 ? Eigen::AngleAxisd(omega.norm(), omega.normalized()).toRotationMatrix()
+                         : Eigen::Matrix3d::Identity();
+  const double sigma = d(6);
+  const Eigen::Vector3d tau = d.segment<3>(3);
+  // x' = (1 + σ) R (x_w − c) + τ + c with x_w = s R_s p + t_s.
+  Similarity next;
+  next.scale = (1.0 + sigma) * s.scale;
+  next.rotation = r * s.rotation;
+  next.translation = (1.0 + sigma) * (r * (s.translation - centre)) + tau + centre;
+  return IsValid(next) ? next : s;
+}
+
+// Each model point's residual (distance to its nearest scan point) under `s`; the nearest points
+// in `nearest` when given.
+std::vector<double> ScanResiduals(const std::vector<Eigen::Vector3d>& model, const ScanIndex& scan,
+                                  const Similarity& s,
+                                  std::vector<Eigen::Vector3d>* nearest = nullptr) {
+  std::vector<double> residuals(model.size());
+  if (nearest) nearest->resize(model.size());
+  Eigen::Vector3d y;
+  for (size_t i = 0; i < model.size(); ++i) {
+    residuals[i] = scan.Nearest(s.Apply(model[i]), &y);
+    if (nearest) (*nearest)[i] = y;
+  }
+  return residuals;
+}
+
+// One ICP step: the pairs whose residual is at most max(floor, the keep-quantile) refitted by
+// Umeyama with scale; `s` unchanged when fewer than three pairs remain or the fit degenerates.
+Similarity IcpStep(const std::vector<Eigen::Vector3d>& model, const ScanIndex& scan,
+                   const Similarity& s, double keep, double floor) {
+  std::vector<Eigen::Vector3d> nearest;
+  const std::vector<double> residuals = ScanResiduals(model, scan, s, &nearest);
+  const double limit = std::max(floor, Quantile(residuals, keep));
+  std::vector<Eigen::Vector3d> src, dst;
+  for (size_t i = 0; i < model.size(); ++i) {
+    if (std::isfinite(residuals[i]) && residuals[i] <= limit) {
+      src.push_back(model[i]);
+      dst.push_back(nearest[i]);
+    }
+  }
+  if (src.size() < 3) return s;
+  std::vector<int> all(src.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  const Similarity next = FitSimilarity(src, dst, all);
+  return IsValid(next) ? next : s;
+}
+
+struct Moments {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // principal axes, ascending variance
+  double variance = 0.0;                               // trace of the covariance
+};
+
+Moments MomentsOf(const std::vector<Eigen::Vector3d>& points) {
+  Moments m;
+  for (const Eigen::Vector3d& p : points) m.centroid += p;
+  m.centroid /= static_cast<double>(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& p : points) {
+    covariance += (p - m.centroid) * (p - m.centroid).transpose();
+  }
+  covariance /= static_cast<double>(points.size());
+  m.axes = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvectors();
+  m.variance = covariance.trace();
+  return m;
+}
+
+// The rotations taking the model's principal axes onto the scan's, in any order and direction
+// (24 proper rotations: the axes of two clouds of different extent need not pair up by size).
+std::vector<Eigen::Matrix3d> AxisRotations(const Eigen::Matrix3d& model_axes,
+                                           const Eigen::Matrix3d& scan_axes) {
+  std::vector<Eigen::Matrix3d> rotations;
+  std::array<int, 3> order = {0, 1, 2};
+  do {
+    for (int signs = 0; signs < 8; ++signs) {
+      Eigen::Matrix3d target;
+      for (int k = 0; k < 3; ++k) {
+        target.col(k) = scan_axes.col(order[k]) * (((signs >> k) & 1) ? -1.0 : 1.0);
+      }
+      const Eigen::Matrix3d r = target * model_axes.transpose();
+      if (r.determinant() > 0.0) rotations.push_back(r);
+    }
+  } while (std::next_permutation(order.begin(), order.end()));
+  return rotations;
+}
+
+}  // namespace
+
+Similarity Similarity::FromMatrix(const Eigen::Matrix4d& m) {
+  const Similarity s = Decompose(m);
+  const bool rotation_ok =
+      (s.rotation.transpose() * s.rotation - Eigen::Matrix3d::Identity()).norm() < 1e-6 &&
+      std::abs(s.rotation.determinant() - 1.0) < 1e-6;
+  const bool last_row_ok = m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1));
+  if (!IsValid(s) || !rotation_ok || !last_row_ok) {
+    std::ostringstream text;
+    text << m.format(Eigen::IOFormat(Eigen::StreamPrecision, Eigen::DontAlignCols, " ", "; "));
+    throw Error("not a similarity transform [sR t; 0 1]: " + text.str());
+  }
+  return s;
+}
+
+Eigen::Matrix4d Similarity::Matrix() const {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = scale * rotation;
+  m.topRightCorner<3, 1>() = translation;
+  return m;
+}
+
+Similarity Similarity::Inverse() const {
+  Similarity inverse;
+  inverse.scale = 1.0 / scale;
+  inverse.rotation = rotation.transpose();
+  inverse.translation = -(rotation.transpose() * translation) / scale;
+  return inverse;
+}
+
+double Similarity::RotationAngleDeg() const {
+  const double c = std::clamp((rotation.trace() - 1.0) / 2.0, -1.0, 1.0);
+  return std::acos(c) * 180.0 / kPi;
+}
+
+Camera Similarity::Apply(const Camera& camera_model) const {
+  Camera camera = camera_model;
+  camera.center_world = Apply(camera_model.center_world);
+  camera.world_from_camera_rotation = rotation * camera_model.world_from_camera_rotation;
+  return camera;
+}
+
+void AlignmentOptions::Check() const {
+  if (!(max_residual > 0.0) || !std::isfinite(max_residual)) {
+    throw ConfigError(
+        ViolatedConstraint("dataset.align_max_residual", FormatNumber(max_residual), "> 0"));
+  }
+  if (!(min_inlier_share >= 0.0 && min_inlier_share <= 1.0)) {
+    throw ConfigError(ViolatedConstraint("dataset.align_min_inlier_share",
+                                         FormatNumber(min_inlier_share), "in [0, 1]"));
+  }
+  if (!(max_relative_residual > 0.0 && max_relative_residual <= 1.0)) {
+    throw ConfigError(ViolatedConstraint("dataset.align_max_relative_residual",
+                                         FormatNumber(max_relative_residual), "in (0, 1]"));
+  }
+  if (ransac_iterations < 1) {
+    throw ConfigError(ViolatedConstraint("dataset.align_ransac_iterations",
+                                         std::to_string(ransac_iterations), ">= 1"));
+  }
+  if (max_model_points < 3) {
+    throw ConfigError(ViolatedConstraint("dataset.align_max_model_points",
+                                         std::to_string(max_model_points), ">= 3"));
+  }
+}
+
+std::string AlignmentResult::Describe() const {
+  std::ostringstream s;
+  s.precision(4);
+  const Eigen::Vector3d& t = world_from_model.translation;
+  s << "scale " << world_from_model.scale << ", rotation " << world_from_model.RotationAngleDeg()
+    << " deg, translation (" << t.x() << ", " << t.y() << ", " << t.z() << "); residuals median "
+    << median_residual << ", 90th percentile " << p90_residual << ", RMS " << rms_residual
+    << " (median " << 100.0 * relative_median_residual << " % of the model's spread "
+    << model_spread << "); " << num_inliers << " of " << num_correspondences << " "
+    << (method == "centres" ? "centres" : "model points") << " inliers (" << 100.0 * inlier_share
+    << " %)";
+  if (method == "scan") s << "; " << hypotheses << " hypotheses, " << iterations << " ICP steps";
+  return s.str();
+}
+
+AlignmentResult AlignToKnownPoints(const std::vector<Eigen::Vector3d>& model,
+                                   const std::vector<Eigen::Vector3d>& world,
+                                   const AlignmentOptions& options) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  if (model.size() != world.size()) {
+    throw Error("alignment to known points: " + std::to_string(model.size()) +
+                " model points but " + std::to_string(world.size()) + " known positions");
+  }
+  const int n = static_cast<int>(model.size());
+  if (n < 3) {
+    throw Error("alignment to known points: " + std::to_string(n) +
+                " matched points, at least 3 non-collinear ones are needed");
+  }
+  std::vector<int> all(n);
+  for (int i = 0; i < n; ++i) all[i] = i;
+  if (NonCollinearity(model, all) < 1e-6 || NonCollinearity(world, all) < 1e-6) {
+    throw Error("alignment to known points: the " + std::to_string(n) +
+                " matched points are collinear: a similarity needs 3 non-collinear ones");
+  }
+  const double threshold = options.max_residual;
+  auto inliers_of = [&](const Similarity& s, double* cost) {
+    std::vector<int> inliers;
+    *cost = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double r2 = (s.Apply(model[i]) - world[i]).squaredNorm();
+      if (r2 <= threshold * threshold) inliers.push_back(i);
+      *cost += std::min(r2, threshold * threshold);  // MSAC: ties go to the tighter fit
+    }
+    return inliers;
+  };
+  // Every triple when there are few (deterministic and complete), else seeded random samples.
+  std::vector<std::array<int, 3>> samples;
+  const double triples = static_cast<double>(n) * (n - 1) * (n - 2) / 6.0;
+  if (triples <= options.ransac_iterations) {
+    for (int a = 0; a < n; ++a) {
+      for (int b = a + 1; b < n; ++b) {
+        for (int c = b + 1; c < n; ++c) samples.push_back({a, b, c});
+      }
+    }
+  } else {
+    std::mt19937_64 random(options.seed);
+    std::uniform_int_distribution<int> pick(0, n - 1);
+    while (static_cast<int>(samples.size()) < options.ransac_iterations) {
+      const int a = pick(random), b = pick(random), c = pick(random);
+      if (a != b && b != c && a != c) samples.push_back({a, b, c});
+    }
+  }
+  Similarity best;
+  std::vector<int> best_inliers;
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (const std::array<int, 3>& sample : samples) {
+    const std::vector<int> which(sample.begin(), sample.end());
+    if (NonCollinearity(model, which) < 1e-3) continue;  // an ill-conditioned minimal sample
+    const Similarity s = FitSimilarity(model, world, which);
+    if (!IsValid(s)) continue;
+    double cost = 0.0;
+    const std::vector<int> inliers = inliers_of(s, &cost);
+    if (inliers.size() > best_inliers.size() ||
+        (inliers.size() == best_inliers.size() && cost < best_cost)) {
+      best = s;
+      best_inliers = inliers;
+      best_cost = cost;
+    }
+  }
+  // Local optimisation: refit on the consensus until it no longer grows.
+  for (int round = 0;
+       round < 10 && best_inliers.size() >= 3 && NonCollinearity(model, best_inliers) >= 1e-6;
+       ++round) {
+    const Similarity s = FitSimilarity(model, world, best_inliers);
+    if (!IsValid(s)) break;
+    double cost = 0.0;
+    std::vector<int> inliers = inliers_of(s, &cost);
+    if (inliers.size() < best_inliers.size()) break;
+    const bool same = inliers == best_inliers;
+    best = s;
+    best_inliers = std::move(inliers);
+    if (same) break;
+  }
+  if (best_inliers.size() < 3) best = FitSimilarity(model, world, all);
+
+  AlignmentResult result;
+  result.method = "centres";
+  result.world_from_model = best;
+  result.hypotheses = static_cast<int>(samples.size());
+  std::vector<Eigen::Vector3d> aligned(n);
+  result.residuals.resize(n);
+  for (int i = 0; i < n; ++i) {
+    aligned[i] = best.Apply(model[i]);
+    result.residuals[i] = (aligned[i] - world[i]).norm();
+  }
+  FillStatistics(result.residuals, aligned, threshold, &result);
+  result.seconds = Seconds(start);
+  return result;
+}
+
+AlignmentResult AlignToScan(const std::vector<Eigen::Vector3d>& model_points,
+                            const PointCloud& scan, const AlignmentOptions& options) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Eigen::Vector3d> finite;
+  for (const Eigen::Vector3d& p : model_points) {
+    if (p.allFinite()) finite.push_back(p);
+  }
+  const std::vector<Eigen::Vector3d> model =
+      EveryKth(finite, static_cast<size_t>(options.max_model_points));
+  PclCloud::Ptr full(new PclCloud);
+  full->reserve(scan.size());
+  std::vector<Eigen::Vector3d> scan_points;
+  for (const Eigen::Vector3f& p : scan.points) {
+    if (p.allFinite()) full->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  }
+  if (model.size() < 3 || full->size() < 3) {
+    throw Error("alignment to the scan: " + std::to_string(model.size()) + " model points and " +
+                std::to_string(full->size()) + " scan points: at least 3 finite points of each");
+  }
+  for (size_t i = 0, step = std::max<size_t>(1, full->size() / kCoarseScanPoints); i < full->size();
+       i += step) {
+    const pcl::PointXYZ& p = (*full)[i];
+    scan_points.emplace_back(p.x, p.y, p.z);
+  }
+  PclCloud::Ptr coarse_cloud(new PclCloud);
+  for (const Eigen::Vector3d& p : scan_points) {
+    coarse_cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                          static_cast<float>(p.z())));
+  }
+  const ScanIndex coarse_scan(coarse_cloud);
+  const std::vector<Eigen::Vector3d> coarse_model = EveryKth(model, kCoarseModelPoints);
+
+  // Coarse: the model's centroid on the scan's, its principal axes on the scan's (any pairing),
+  // its spread scaled to the scan's (times kScaleFactors: the scan usually covers more than the
+  // model). Each hypothesis refined by a short trimmed ICP on subsets and scored by its median
+  // residual relative to the model's size there (scale-free, so a shrunk model does not win by
+  // its small residuals). The scan's moments are then taken again over the part of the scan the
+  // best hypothesis covers (its box, widened by a quarter on each side), whose extent is the
+  // model's, and the search repeated from them while the score improves.
+  const Moments model_moments = MomentsOf(model);
+  Moments scan_moments = MomentsOf(scan_points);
+  if (!(model_moments.variance > 0.0) || !(scan_moments.variance > 0.0)) {
+    throw Error("alignment to the scan: the model's or the scan's points all coincide");
+  }
+  Similarity best;
+  double best_score = std::numeric_limits<double>::infinity();
+  int hypotheses = 0;
+  for (int round = 0; round < kCoarseRounds; ++round) {
+    const double spread_ratio = std::sqrt(scan_moments.variance / model_moments.variance);
+    bool improved = false;
+    for (const Eigen::Matrix3d& rotation : AxisRotations(model_moments.axes, scan_moments.axes)) {
+      for (const double factor : kScaleFactors) {
+        Similarity s;
+        s.scale = spread_ratio * factor;
+        s.rotation = rotation;
+        s.translation = scan_moments.centroid - s.scale * (rotation * model_moments.centroid);
+        for (int i = 0; i < kCoarseIterations; ++i) {
+          s = IcpStep(coarse_model, coarse_scan, s, kCoarseKeep, 0.0);
+        }
+        const double score = Quantile(ScanResiduals(coarse_model, coarse_scan, s), 0.5) /
+                             (s.scale * std::sqrt(model_moments.variance));
+        ++hypotheses;
+        if (score < best_score) {
+          best_score = score;
+          best = s;
+          improved = true;
+        }
+      }
+    }
+    if (!improved && round > 0) break;
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector3d hi = -lo;
+    for (const Eigen::Vector3d& p : coarse_model) {
+      lo = lo.cwiseMin(best.Apply(p));
+      hi = hi.cwiseMax(best.Apply(p));
+    }
+    const Eigen::Vector3d margin = 0.25 * (hi - lo);
+    std::vector<Eigen::Vector3d> covered;
+    for (const Eigen::Vector3d& p : scan_points) {
+      if ((p.array() >= (lo - margin).array()).all() &&
+          (p.array() <= (hi + margin).array()).all()) {
+        covered.push_back(p);
+      }
+    }
+    if (covered.size() < 100) break;
+    scan_moments = MomentsOf(covered);
+  }
+
+  // Fine: against the whole scan, the closest 70 % of the pairs and at least those within
+  // max_residual, until the transform no longer changes: first on a subset of the model points,
+  // then on all of them.
+  const ScanIndex full_scan(full);
+  Similarity s = best;
+  int iterations = 0;
+  const double size = std::sqrt(model_moments.variance);
+  auto refine = [&](const std::vector<Eigen::Vector3d>& points, double tolerance) {
+    for (int i = 0; i < kMaxFineIterations; ++i, ++iterations) {
+      const Similarity next = IcpStep(points, full_scan, s, kFineKeep, options.max_residual);
+      const double change = std::abs(next.scale / s.scale - 1.0) +
+                            (next.rotation - s.rotation).norm() +
+                            (next.translation - s.translation).norm() / (next.scale * size);
+      s = next;
+      if (change < tolerance) break;
+    }
+  };
+  // Point-to-point ICP on a sparse scan stops in a local minimum a few per cent off in scale
+  // when it starts there: it is started again from the coarse result's scale times 0.9, 0.95,
+  // 1.05 and 1.1 on the subset, and the start with the least relative median residual is kept.
+  const std::vector<Eigen::Vector3d> subset = EveryKth(model, kFineSubsetPoints);
+  Similarity chosen;
+  double chosen_score = std::numeric_limits<double>::infinity();
+  for (const double factor : {1.0, 0.9, 0.95, 1.05, 1.1}) {
+    s = best;
+    s.scale *= factor;
+    s.translation =
+        best.Apply(model_moments.centroid) - s.scale * (s.rotation * model_moments.centroid);
+    refine(subset, 1e-8);
+    const double score = Quantile(ScanResiduals(subset, full_scan, s), 0.5) / s.scale;
+    if (score < chosen_score) {
+      chosen_score = score;
+      chosen = s;
+    }
+  }
+  s = chosen;
+  refine(model, 1e-10);
+  // Then point-to-plane steps on every model point, pairs within max_residual.
+  for (int i = 0; i < kPlaneIterations; ++i, ++iterations) {
+    const Similarity next = PlaneStep(model, full_scan, s, options.max_residual);
+    const double change = std::abs(next.scale / s.scale - 1.0) +
+                          (next.rotation - s.rotation).norm() +
+                          (next.translation - s.translation).norm() / (next.scale * size);
+    s = next;
+    if (change < 1e-10) break;
+  }
+
+  AlignmentResult result;
+  result.method = "scan";
+  result.world_from_model = s;
+  result.hypotheses = hypotheses;
+  result.iterations = iterations;
+  const std::vector<double> residuals = ScanResiduals(model, full_scan, s);
+  std::vector<Eigen::Vector3d> aligned(model.size());
+  for (size_t i = 0; i < model.size(); ++i) aligned[i] = s.Apply(model[i]);
+  FillStatistics(residuals, aligned, options.max_residual, &result);
+  result.seconds = Seconds(start);
+  return result;
+}
+
+void CheckAlignment(const AlignmentResult& result, const AlignmentOptions& options,
+                    const std::string& what) {
+  std::vector<std::string> failures;
+  if (result.inlier_share < options.min_inlier_share) {
+    failures.push_back("inlier share " + FormatNumber(100.0 * result.inlier_share) +
+                       " % < dataset.align_min_inlier_share " +
+                       FormatNumber(100.0 * options.min_inlier_share) + " %");
+  }
+  if (result.median_residual > options.max_residual) {
+    failures.push_back("median residual " + FormatNumber(result.median_residual) +
+                       " > dataset.align_max_residual " + FormatNumber(options.max_residual));
+  }
+  if (result.method == "scan" && result.relative_median_residual > options.max_relative_residual) {
+    failures.push_back("median residual " + FormatNumber(100.0 * result.relative_median_residual) +
+                       " % of the model's spread > dataset.align_max_relative_residual " +
+                       FormatNumber(100.0 * options.max_relative_residual) + " %");
+  }
+  if (failures.empty()) return;
+  std::string reasons;
+  for (const std::string& f : failures) reasons += (reasons.empty() ? "" : "; ") + f;
+  throw Error(what + ": alignment refused (" + reasons + "): " + result.Describe());
+}
+
+}  // namespace gcpstereo::align
