@@ -38,6 +38,21 @@ Suites
             - fountain-P11, all 11 views with image-match GCPs (configs/fountain_p11.yaml):
               time, memory, pictures (no ground truth here).
             Not part of 'all' (about 75 minutes on 2 cores): ask for it with --suite scene.
+  speed     issue 25's three runs, timed: each KITTI frame (configs/kitti_lidar.yaml with
+            eval.lidar_holdout=true; held-out bad-3 / bad-1), the Middlebury scenes two-view
+            (configs/middlebury_stereo.yaml with the GCP energy; bad-1 nonocc / all; the <= 2 s
+            target on teddy, or on Aloe when teddy's data is absent), fountain-P11 view 0005 as
+            configs/fountain_p11.yaml ships it and the synthetic fountain's view 0005 (within
+            3 sigma); per-stage seconds in pipeline order, total, peak memory, accuracy, OpenCV
+            SGBM's time on the same pair and the ratio, the issue's targets met or not.
+            --repeat N: every timed run N times (median time, largest peak memory);
+            --baseline-build DIR: every gcpstereo run also with DIR's program (runs under
+            OUT/runs/speed/baseline/), the tables show after, before and after/before.
+            Not part of 'all': it times endtoend's runs again, about 10-15 minutes per build and
+            repetition on 2 cores (measured with the machine shared: a KITTI frame 26 s, Aloe
+            6-13 s, the fountain-P11 view 2.6 min; the synthetic fountain view takes 1.5-7.5 min).
+            Other work on the machine moves these times by a factor up to 2: compare builds in
+            one invocation (--baseline-build), whose runs take turns.
 
 Scenes run one after the other (the machine may be shared). A failing scene never stops a suite:
 its error is recorded in the table and the JSON. Run folders stay under OUT/runs/ for inspection;
@@ -47,6 +62,7 @@ Example (from the repository root, data in ../shared/data):
   tools/benchmark.py --suite costs --build build --out bench-out
   tools/benchmark.py --suite table2 --scenes tsukuba,venus
   tools/benchmark.py --suite scene --scenes synthetic   # the synthetic fountain scene only
+  tools/benchmark.py --suite speed --baseline-build ../old/build --repeat 3
 """
 
 import argparse
@@ -55,6 +71,7 @@ import json
 import os
 import platform
 import shutil
+import statistics
 import struct
 import subprocess
 import sys
@@ -94,6 +111,11 @@ _add_middlebury("tsukuba", "scene1.row3.col3", "scene1.row3.col4",
                 "truedisp.row3.col3.pgm", None, 16, 15, 16)
 _add_middlebury("venus", "im2", "im6", ["im%d" % i for i in range(0, 9) if i not in (7, 8)],
                 "disp2.pgm", "disp6.pgm", 8, 19, 32)
+# Teddy (2003, quarter size 450×375, disparities 0…59): the speed suite's two-view timing scene
+# (issue 25). Not in the shared data; used by every suite when DATA/middlebury/teddy holds
+# Middlebury's files (im0…im8.png, disp2.png, disp6.png; nonocc/all/disc.png when present).
+_add_middlebury("teddy", "im2", "im6", ["im%d" % i for i in range(0, 9)],
+                "disp2.png", "disp6.png", 4, 59, 64)
 for _scene in ["Aloe", "Baby1", "Bowling1", "Flowerpots", "Midd1", "Rocks1"]:
     _add_middlebury(_scene, "view1", "view5", ["view%d" % i for i in range(0, 7)],
                     "disp1.png", "disp5.png", 3, 80, 96)
@@ -106,7 +128,7 @@ KITTI_FRAMES = ["0000000000", "0000000010", "0000000020", "0000000030", "0000000
 KITTI_MAX_DISPARITY = 127  # configs/kitti_lidar.yaml labels 0..127
 KITTI_LIDAR_MOTION = "registration"  # configs/kitti_lidar.yaml gcp.lidar.motion.mode
 
-SUITES = ["costs", "table2", "endtoend", "scene"]
+SUITES = ["costs", "table2", "endtoend", "scene", "speed"]
 
 
 class BenchError(Exception):
@@ -254,8 +276,10 @@ def fmt_seconds(s):
 
 
 class Runner:
-    def __init__(self, args):
-        self.build = os.path.abspath(args.build)
+    def __init__(self, args, build=None):
+        """Runs the programs of `build` (default: --build) with the data, output folder, --reuse
+        and --timeout of `args`."""
+        self.build = os.path.abspath(build or args.build)
         self.data = os.path.abspath(args.data)
         self.out = os.path.abspath(args.out)
         self.reuse = args.reuse
@@ -422,10 +446,58 @@ def multiview_sets(runner, scene):
 
 
 def kitti_sets(runner, frame):
-    drive = os.path.join(runner.data, "kitti", KITTI_DATE, KITTI_DRIVE)
+    drive = kitti_drive_path(runner)
     return ["dataset.path=" + drive, "dataset.reference=" + frame,
             "gcp.lidar.path=" + os.path.join(drive, "velodyne_points", "data", frame + ".bin"),
             "eval.lidar_holdout=true"]
+
+
+def kitti_drive_path(runner):
+    return os.path.join(runner.data, "kitti", KITTI_DATE, KITTI_DRIVE)
+
+
+def kitti_holdout(report):
+    """Held-out LiDAR scores of a kitti_lidar.yaml run (eval.lidar_holdout=true)."""
+    h = dig(report, "metrics", "lidar_holdout", "result")
+    return {"bad3": h["bad3_percent"], "bad1": h["bad1_percent"], "held_out_points": h["counted"]}
+
+
+def middlebury_bad1(report):
+    """bad-1 nonocc / all of a Middlebury run's final map."""
+    m = dig(report, "metrics", "middlebury", "result")
+    return {"bad1_nonocc": bad1(m, "nonocc"), "bad1_all": bad1(m, "all")}
+
+
+def within_3sigma(report):
+    """Share of the synthetic scene's pixels within 3 sigma: the final map and D^."""
+    h = dig(report, "metrics", "depth_sigma")
+    return {"within_3sigma": dig(h, "result", "within_n_sigma_percent", 2),
+            "propagated_within_3sigma": dig(h, "propagated", "within_n_sigma_percent", 2)}
+
+
+def fountain_p11_sets(runner):
+    """configs/fountain_p11.yaml on the shared data (its view 0005 unless more sets follow)."""
+    return ["dataset.path=" + os.path.join(runner.data, "strecha", "fountain-P11")]
+
+
+def synthetic_fountain_sets(data):
+    """configs/synthetic_fountain.yaml on the synthetic scene in `data` with its laser GCPs."""
+    return ["dataset.path=" + data, "gcp.lidar.path=" + os.path.join(data, "gt", "laser.ply")]
+
+
+def sgbm_middlebury_args(runner, scene):
+    """gcpstereo_sgbm_baseline on the ground-truth pair of `scene`."""
+    return ["--format", "middlebury", "--path", middlebury_path(runner, scene),
+            "--reference", scene["reference"], "--neighbor", scene["right"],
+            "--num-disparities", str(scene["sgbm_num_disparities"])]
+
+
+def sgbm_kitti_args(runner, frame):
+    """gcpstereo_sgbm_baseline on a KITTI frame, scored on kitti_lidar.yaml's held-out points."""
+    return ["--format", "kitti_raw", "--path", kitti_drive_path(runner), "--reference", frame,
+            "--num-disparities", str(KITTI_MAX_DISPARITY + 1), "--lidar-holdout",
+            # the held-out points of configs/kitti_lidar.yaml (gcp.lidar.motion.mode)
+            "--lidar-motion", KITTI_LIDAR_MOTION]
 
 
 def gcp_outliers_from_ply(runner, scene, report, folder):
@@ -635,16 +707,18 @@ def stage_seconds(report):
     return {name: stage.get("seconds") for name, stage in sorted(report.get("stages", {}).items())}
 
 
+def run_summary(report):
+    """Stage times, total, peak memory, GCPs, labels and image size of a run's report.json."""
+    return {"stages": stage_seconds(report), "total_seconds": report.get("total_seconds"),
+            "peak_memory_bytes": report.get("peak_memory_bytes"),
+            "gcp_count": report.get("gcps", {}).get("count"),
+            "labels": report.get("labels", {}).get("count"),
+            "size": "%sx%s" % (report.get("dataset", {}).get("reference", {}).get("width"),
+                               report.get("dataset", {}).get("reference", {}).get("height"))}
+
+
 def suite_endtoend(runner, scenes, frames, include_fountain):
     rows = {}  # ordered: data set -> measurement
-
-    def summary(report):
-        return {"stages": stage_seconds(report), "total_seconds": report.get("total_seconds"),
-                "peak_memory_bytes": report.get("peak_memory_bytes"),
-                "gcp_count": report.get("gcps", {}).get("count"),
-                "labels": report.get("labels", {}).get("count"),
-                "size": "%sx%s" % (report.get("dataset", {}).get("reference", {}).get("width"),
-                                   report.get("dataset", {}).get("reference", {}).get("height"))}
 
     for scene in scenes:
         name = scene["name"]
@@ -652,21 +726,18 @@ def suite_endtoend(runner, scenes, frames, include_fountain):
         def middlebury():
             report, _ = runner.run("table2/%s/with_gcp" % name, "middlebury_stereo.yaml",
                                    stereo_sets(runner, scene) + ["optimizer.use_gcp_energy=true"])
-            out = summary(report)
-            m = dig(report, "metrics", "middlebury", "result")
-            out["bad1_nonocc"], out["bad1_all"] = bad1(m, "nonocc"), bad1(m, "all")
+            out = run_summary(report)
+            out.update(middlebury_bad1(report))
             out["metrics"] = "bad-1 nonocc %.2f %%, all %.2f %%" % (out["bad1_nonocc"],
                                                                     out["bad1_all"])
             return out
         measure(rows, "middlebury " + name, middlebury)
 
         def sgbm():
-            s, folder = runner.sgbm("endtoend/sgbm_%s" % name, [
-                "--format", "middlebury", "--path", middlebury_path(runner, scene),
-                "--reference", scene["reference"], "--neighbor", scene["right"],
-                "--num-disparities", str(scene["sgbm_num_disparities"]),
-                "--filled-output", os.path.join(runner.runs, "endtoend", "sgbm_%s" % name,
-                                                "disparity_filled.pfm")])
+            filled = ["--filled-output", os.path.join(runner.runs, "endtoend", "sgbm_%s" % name,
+                                                      "disparity_filled.pfm")]
+            s, folder = runner.sgbm("endtoend/sgbm_%s" % name,
+                                    sgbm_middlebury_args(runner, scene) + filled)
             e = runner.eval_disparity("endtoend/sgbm_%s/eval" % name,
                                       os.path.join(folder, "disparity.pfm"), scene)
             f = runner.eval_disparity("endtoend/sgbm_%s/eval_filled" % name,
@@ -689,23 +760,19 @@ def suite_endtoend(runner, scenes, frames, include_fountain):
         def kitti():
             report, _ = runner.run("endtoend/kitti_%s" % frame, "kitti_lidar.yaml",
                                    kitti_sets(runner, frame))
-            out = summary(report)
-            h = dig(report, "metrics", "lidar_holdout", "result")
-            out["bad3"], out["bad1"] = h["bad3_percent"], h["bad1_percent"]
+            out = run_summary(report)
+            out.update(kitti_holdout(report))
             out["metrics"] = "held-out LiDAR bad-3 %.2f %%, bad-1 %.2f %% (%d points)" % (
-                h["bad3_percent"], h["bad1_percent"], h["counted"])
+                out["bad3"], out["bad1"], out["held_out_points"])
             return out
         measure(rows, "kitti " + frame, kitti)
 
         def sgbm():
-            drive = os.path.join(runner.data, "kitti", KITTI_DATE, KITTI_DRIVE)
-            s, _ = runner.sgbm("endtoend/sgbm_kitti_%s" % frame, [
-                "--format", "kitti_raw", "--path", drive, "--reference", frame,
-                "--num-disparities", str(KITTI_MAX_DISPARITY + 1), "--lidar-holdout",
-                # the held-out points of configs/kitti_lidar.yaml (gcp.lidar.motion.mode)
-                "--lidar-motion", KITTI_LIDAR_MOTION,
-                "--filled-output", os.path.join(runner.runs, "endtoend", "sgbm_kitti_%s" % frame,
-                                                "disparity_filled.pfm")])
+            filled = ["--filled-output", os.path.join(runner.runs, "endtoend",
+                                                      "sgbm_kitti_%s" % frame,
+                                                      "disparity_filled.pfm")]
+            s, _ = runner.sgbm("endtoend/sgbm_kitti_%s" % frame,
+                               sgbm_kitti_args(runner, frame) + filled)
             h = dig(s, "lidar_holdout", "result")
             hf = dig(s, "lidar_holdout", "filled")
             out = {"total_seconds": s["seconds"], "stages": {"sgbm": s["seconds"]},
@@ -722,10 +789,9 @@ def suite_endtoend(runner, scenes, frames, include_fountain):
 
     if include_fountain:
         def fountain():
-            path = os.path.join(runner.data, "strecha", "fountain-P11")
             report, _ = runner.run("endtoend/fountain-P11", "fountain_p11.yaml",
-                                   ["dataset.path=" + path])
-            out = summary(report)
+                                   fountain_p11_sets(runner))
+            out = run_summary(report)
             out["metrics"] = "none (no laser ground truth in the shared data)"
             return out
         measure(rows, "fountain-P11", fountain)
@@ -733,14 +799,12 @@ def suite_endtoend(runner, scenes, frames, include_fountain):
         def synthetic_fountain():
             data = runner.synth("fountain")
             report, _ = runner.run("endtoend/synthetic-fountain", "synthetic_fountain.yaml",
-                                   ["dataset.path=" + data,
-                                    "gcp.lidar.path=" + os.path.join(data, "gt", "laser.ply")])
-            out = summary(report)
-            h = dig(report, "metrics", "depth_sigma")
+                                   synthetic_fountain_sets(data))
+            out = run_summary(report)
+            sigma = within_3sigma(report)
             out["metrics"] = "within 3σ: D+GCP %.2f %%, D̂ %.2f %%" % (
-                dig(h, "result", "within_n_sigma_percent", 2),
-                dig(h, "propagated", "within_n_sigma_percent", 2))
-            out["within_3sigma"] = dig(h, "result", "within_n_sigma_percent", 2)
+                sigma["within_3sigma"], sigma["propagated_within_3sigma"])
+            out["within_3sigma"] = sigma["within_3sigma"]
             return out
         measure(rows, "synthetic fountain", synthetic_fountain)
 
@@ -832,11 +896,10 @@ def suite_scene(runner, include_synthetic, include_fountain):
         def synthetic(sets):
             def run():
                 data = runner.synth("fountain")
-                base = ["dataset.path=" + data,
-                        "gcp.lidar.path=" + os.path.join(data, "gt", "laser.ply")]
                 key = "scene/synthetic-fountain/" + sets[0]
                 report, folder = runner.run(key, "synthetic_fountain.yaml",
-                                            base + SCENE_ALL_VIEWS + sets[1])
+                                            synthetic_fountain_sets(data) + SCENE_ALL_VIEWS +
+                                            sets[1])
                 return scene_summary(report, folder)
             return run
         variants = [("D+GCP", ("d_gcp", [])),
@@ -858,9 +921,8 @@ def suite_scene(runner, include_synthetic, include_fountain):
 
     if include_fountain:
         def fountain():
-            path = os.path.join(runner.data, "strecha", "fountain-P11")
             report, folder = runner.run("scene/fountain-P11", "fountain_p11.yaml",
-                                        ["dataset.path=" + path] + SCENE_ALL_VIEWS)
+                                        fountain_p11_sets(runner) + SCENE_ALL_VIEWS)
             return scene_summary(report, folder)
         measure(rows, "fountain-P11", fountain)
 
@@ -938,6 +1000,278 @@ def suite_scene(runner, include_synthetic, include_fountain):
     return {"rows": rows, "markdown": "\n".join(md)}
 
 
+# Issue 25's targets (wall time on 2 cores, peak memory): seconds, bytes (None = no target).
+SPEED_TARGETS = {"kitti": (2.0, 500e6), "teddy": (2.0, None), "fountain-P11": (30.0, 2e9)}
+# The issue times Teddy (2003, 450×375, 60 labels); without its data (not in the shared data) the
+# Teddy target is checked on Aloe (427×370, 81 labels), the Teddy-size scene of
+# tools/benchmarks/optimize_benchmark.cpp.
+TEDDY_STAND_IN = "Aloe"
+# report.json lists the stages by name; the tables show them in the order the pipeline runs them
+# (pipeline/src/run.cc), then any others by name.
+STAGE_ORDER = ["load", "gcps", "propagation", "cost_and_optimization", "left_right_check",
+               "plane_fit", "evaluation", "mesh", "write", "colmap_export"]
+# Accuracy figures where a larger value is better (all others are error rates).
+HIGHER_IS_BETTER = {"within_3sigma", "propagated_within_3sigma"}
+
+
+def combined(runs):
+    """Repetitions [(summary, accuracy), ...] of one run as one: the median total, per-stage and
+    untimed (total − stages) seconds, the largest peak memory, the first repetition's accuracy;
+    every repetition's totals and peaks, and their accuracies when they differ (the runs are meant
+    to be deterministic)."""
+    summaries = [s for s, _ in runs]
+    out = dict(summaries[0])
+    out.update(runs[0][1])
+    out["total_seconds_each"] = [s["total_seconds"] for s in summaries]
+    out["total_seconds"] = statistics.median(out["total_seconds_each"])
+    stages = [s.get("stages", {}) for s in summaries]
+    out["stages"] = {name: statistics.median(st.get(name) or 0.0 for st in stages)
+                     for name in stages[0]}
+    if stages[0]:
+        out["untimed_seconds"] = statistics.median(
+            s["total_seconds"] - sum(v or 0.0 for v in s.get("stages", {}).values())
+            for s in summaries)
+    peaks = [s.get("peak_memory_bytes") for s in summaries]
+    if any(p is not None for p in peaks):  # (SGBM's report has none)
+        out["peak_memory_bytes_each"] = peaks
+        out["peak_memory_bytes"] = max(p for p in peaks if p is not None)
+    if any(a != runs[0][1] for _, a in runs):
+        out["accuracy_each"] = [a for _, a in runs]
+    return out
+
+
+def suite_speed(runner, baseline, scenes, frames, include_fountain, include_synthetic, repeat):
+    """Issue 25's three runs, each timed `repeat` times with this build (and with `baseline`, a
+    Runner of another build, when given): KITTI frames, the two-view Middlebury scenes, one
+    fountain view."""
+    builds = [("after", runner)] + ([("before", baseline)] if baseline else [])
+
+    def timed(table, name, what, config, sets, accuracy):
+        """gcpstereo run of CONFIG + sets (a list, or a function giving it) by every build, run
+        folders runs/speed[/baseline]/WHAT/runI; table[name][build] = the combined figures. The
+        builds take turns (after 1, before 1, after 2, ...): a change of the machine's load
+        reaches both. A build's first failure ends its repetitions."""
+        row = table.setdefault(name, {})
+        runs = {build: [] for build, _ in builds}
+        for i in range(1, repeat + 1):
+            for build, r in builds:
+                if "error" in row.get(build, {}):
+                    continue
+                prefix = "speed/" if build == "after" else "speed/baseline/"
+
+                def once():
+                    items = sets() if callable(sets) else sets
+                    report, _ = r.run("%s%s/run%d" % (prefix, what, i), config, items)
+                    runs[build].append((run_summary(report), accuracy(report)))
+                    return {}
+                measure(row, build, once)
+        for build, _ in builds:
+            if "error" not in row[build]:
+                row[build] = combined(runs[build])
+        return row
+
+    def sgbm_timed(row, what, args, accuracy):
+        """OpenCV SGBM on the same pair (timed around compute() only), row["sgbm"]."""
+        def run():
+            def once(i):
+                s, _ = runner.sgbm("speed/%s/run%d" % (what, i), args)
+                return {"total_seconds": s["seconds"], "stages": {}}, accuracy(s)
+            return combined([once(i) for i in range(1, repeat + 1)])
+        measure(row, "sgbm", run)
+
+    kitti = {}
+    for frame in frames:
+        row = timed(kitti, frame, "kitti_" + frame, "kitti_lidar.yaml", kitti_sets(runner, frame),
+                    kitti_holdout)
+        sgbm_timed(row, "sgbm_kitti_" + frame, sgbm_kitti_args(runner, frame),
+                   lambda s: {"bad3": dig(s, "lidar_holdout", "result", "bad3_percent"),
+                              "bad1": dig(s, "lidar_holdout", "result", "bad1_percent")})
+
+    names = [s["name"] for s in scenes]
+    teddy_data = os.path.isdir(os.path.join(runner.data, "middlebury", "teddy"))
+    timing_scene = "teddy" if teddy_data else TEDDY_STAND_IN
+    two_view = {}
+    for scene in scenes:
+        row = timed(two_view, scene["name"], "middlebury_" + scene["name"],
+                    "middlebury_stereo.yaml",
+                    stereo_sets(runner, scene) + ["optimizer.use_gcp_energy=true"],
+                    middlebury_bad1)
+        sgbm_timed(row, "sgbm_" + scene["name"], sgbm_middlebury_args(runner, scene),
+                   lambda s: {})
+
+    fountain = {}
+    if include_fountain:
+        timed(fountain, "fountain-P11", "fountain-P11", "fountain_p11.yaml",
+              fountain_p11_sets(runner), lambda report: {})
+    if include_synthetic:
+        # one scene for both builds (made by this build's gcpstereo synth)
+        timed(fountain, "synthetic fountain", "synthetic-fountain", "synthetic_fountain.yaml",
+              lambda: synthetic_fountain_sets(runner.synth("fountain")), within_3sigma)
+
+    def target_of(kind, name):
+        if kind == "two_view":
+            return SPEED_TARGETS["teddy"] if name == timing_scene else None
+        return SPEED_TARGETS.get(kind if kind == "kitti" else name)
+
+    tables = [("kitti", kitti, "KITTI frame, full pipeline with LiDAR GCPs",
+               "configs/kitti_lidar.yaml with eval.lidar_holdout=true (8×8 checkerboard: half of "
+               "the scan as GCPs, half scored) on %s; accuracy = bad-3 / bad-1 (%%) on the "
+               "held-out LiDAR points." % KITTI_DRIVE,
+               [("held-out bad-3 %", "bad3"), ("bad-1 %", "bad1")]),
+              ("two_view", two_view, "Middlebury two-view with stereo GCPs",
+               "configs/middlebury_stereo.yaml with optimizer.use_gcp_energy=true on the GT pair, "
+               "integer disparity labels 0…max (as table2); accuracy = bad-1 (%%, |d − gt| > 1 px) "
+               "in nonocc / all. The ≤ %.1f s target is the issue's Teddy's; %s" % (
+                   SPEED_TARGETS["teddy"][0],
+                   "it is checked on teddy." if teddy_data else
+                   "Teddy is not in %s, so it is checked on %s (427×370, labels 0…80), the "
+                   "Teddy-size stand-in of tools/benchmarks/optimize_benchmark.cpp%s." % (
+                       os.path.join(runner.data, "middlebury"), TEDDY_STAND_IN,
+                       "" if TEDDY_STAND_IN in names else " (not selected here)")),
+               [("bad-1 nonocc %", "bad1_nonocc"), ("bad-1 all %", "bad1_all")]),
+              ("fountain", fountain, "Fountain view 0005 at the paper's setting",
+               "fountain-P11: configs/fountain_p11.yaml as shipped (view 0005, 6 neighbours, "
+               "1536×1024, 360 depth labels, image-match GCPs; no ground truth here). Synthetic "
+               "fountain: configs/synthetic_fountain.yaml (view 0005, laser GCPs at s = 16) on "
+               "the scene of `gcpstereo synth --preset fountain`; accuracy = share of pixels "
+               "within 3σ of the exact depth.",
+               [("within 3σ %", "within_3sigma")])]
+
+    md = ["# speed — issue 25: time, memory and accuracy of the three runs", "",
+          "Each gcpstereo run %s; times are the median of %d run%s (per stage and total), peak "
+          "memory the largest (report.json `peak_memory_bytes`), accuracy the first run's. "
+          "Stage columns in seconds, in pipeline order; `untimed` = total − the stages (label "
+          "choice, depth maps, mesh building, report). SGBM = gcpstereo_sgbm_baseline on the "
+          "same rectified pair, timed around compute() only (as endtoend); × SGBM = gcpstereo "
+          "total / SGBM time. Load average when the suite began: %s%s." % (
+              "by this build (%s)" % runner.build if not baseline else
+              "by this build (after: %s) and by the baseline build (before: %s) on the same "
+              "inputs and this checkout's configs; after/before = ratios of the after row to "
+              "the before row, and whether every accuracy figure is no worse" % (
+                  runner.build, baseline.build),
+              repeat, "" if repeat == 1 else "s",
+              " / ".join("%.2f" % x for x in os.getloadavg()),
+              " (runs reused with --reuse were timed earlier)" if runner.reuse else "")]
+    for kind, rows, title, note, accuracy in tables:
+        if not rows:
+            continue
+        md += ["", "## " + title, "", note, ""]
+        md += speed_table(kind, rows, accuracy, baseline is not None, target_of)
+    md += speed_summary(kitti, two_view, fountain, builds)
+    return {"kitti": kitti, "two_view": two_view, "fountain": fountain, "repeat": repeat,
+            "build": runner.build, "baseline_build": baseline.build if baseline else None,
+            "teddy_target_scene": timing_scene, "load_average": os.getloadavg(),
+            "markdown": "\n".join(md)}
+
+
+def speed_table(kind, rows, accuracy, with_baseline, target_of):
+    """One Markdown table of the speed suite: a row per data set and build."""
+    stages = set()
+    for row in rows.values():
+        for build in ("after", "before"):
+            stages.update(row.get(build, {}).get("stages", {}))
+    stages = ([s for s in STAGE_ORDER if s in stages] +
+              sorted(s for s in stages if s not in STAGE_ORDER))
+    has_sgbm = any("sgbm" in row for row in rows.values())
+    header = (["data set"] + (["build"] if with_baseline else []) + ["size", "labels"] + stages +
+              ["untimed", "total s", "peak MB"] + [h for h, _ in accuracy] +
+              (["SGBM s", "× SGBM"] if has_sgbm else []) + ["target"] +
+              (["after/before"] if with_baseline else []))
+    lines = ["| " + " | ".join(header) + " |",
+             "|" + "|".join("---" if h in ("data set", "build", "size", "target", "after/before")
+                            else "---:" for h in header) + "|"]
+    for name, row in rows.items():
+        for build in ("after", "before") if with_baseline else ("after",):
+            m = row.get(build, {"error": "not run"})
+            sgbm = row.get("sgbm", {})
+            first = [name] + ([build] if with_baseline else [])
+            if "error" in m:
+                lines.append("| " + " | ".join(first + ["error: %s" % m["error"]] +
+                                                [""] * (len(header) - len(first) - 1)) + " |")
+                continue
+            cells = first + [m.get("size", ""), str(m.get("labels") or "")]
+            cells += ["%.2f" % m["stages"][s] if s in m.get("stages", {}) else "" for s in stages]
+            peak = m.get("peak_memory_bytes")
+            cells += [cell(m, "untimed_seconds"), cell(m, "total_seconds"),
+                      "%.0f" % (peak / 1e6) if peak else ""]
+            cells += [cell(m, key) for _, key in accuracy]
+            if has_sgbm:
+                if "error" in sgbm:
+                    cells += ["error: %s" % sgbm["error"], ""]
+                elif sgbm.get("total_seconds"):
+                    ratio = m["total_seconds"] / sgbm["total_seconds"]
+                    cells += ["%.2f" % sgbm["total_seconds"],
+                              ("%.1f" if ratio < 10 else "%.0f") % ratio]
+                else:
+                    cells += ["", ""]
+            cells.append(target_cell(m, target_of(kind, name)))
+            if with_baseline:
+                cells.append(after_before_cell(row, accuracy) if build == "after" else "")
+            lines.append("| " + " | ".join(cells) + " |")
+    varying = ["%s (%s): %s" % (name, build, row[build]["accuracy_each"])
+               for name, row in rows.items() for build in ("after", "before")
+               if "accuracy_each" in row.get(build, {})]
+    if varying:
+        lines += ["", "Accuracy differed between repetitions: " + "; ".join(varying)]
+    return lines
+
+
+def target_cell(m, target):
+    if target is None:
+        return ""
+    seconds, memory = target
+    missed = []
+    if m["total_seconds"] > seconds:
+        missed.append("time")
+    peak = m.get("peak_memory_bytes")
+    if memory is not None and (peak is None or peak > memory):
+        missed.append("memory" if peak is not None else "memory unknown")
+    wanted = "≤ %.0f s" % seconds + (", ≤ %.0f MB" % (memory / 1e6) if memory else "")
+    return "%s: %s" % (wanted, "met" if not missed else "NOT met (%s)" % ", ".join(missed))
+
+
+def after_before_cell(row, accuracy):
+    after, before = row.get("after", {}), row.get("before", {})
+    if "error" in after or "error" in before or not before:
+        return ""
+    parts = ["time ×%.2f" % (after["total_seconds"] / before["total_seconds"])]
+    if after.get("peak_memory_bytes") and before.get("peak_memory_bytes"):
+        parts.append("peak ×%.2f" % (after["peak_memory_bytes"] / before["peak_memory_bytes"]))
+    worse = []
+    for _, key in accuracy:
+        a, b = after.get(key), before.get(key)
+        if a is None or b is None:
+            continue
+        if (a < b) if key in HIGHER_IS_BETTER else (a > b):
+            worse.append("%s %.2f → %.2f" % (key, b, a))
+    if any(after.get(key) is not None for _, key in accuracy):
+        parts.append("accuracy WORSE: " + ", ".join(worse) if worse else "accuracy kept")
+    return ", ".join(parts)
+
+
+def speed_summary(kitti, two_view, fountain, builds):
+    """The accuracy lines of issue 25's 'nothing got worse' per build."""
+    lines = []
+    for build, _ in builds:
+        label = build if len(builds) > 1 else "this build"
+        bad3 = [row[build]["bad3"] for row in kitti.values()
+                if "bad3" in row.get(build, {})]
+        if bad3:
+            lines.append("- %s, KITTI held-out bad-3 over %d frame%s: mean %.2f %%, worst %.2f %% "
+                         "(issue 25, six dev frames at ec47109: mean 2.01 %%, worst 2.72 %%)" % (
+                             label, len(bad3), "" if len(bad3) == 1 else "s",
+                             sum(bad3) / len(bad3), max(bad3)))
+        nonocc = ["%s %.2f" % (name, row[build]["bad1_nonocc"])
+                  for name, row in two_view.items() if "bad1_nonocc" in row.get(build, {})]
+        if nonocc:
+            lines.append("- %s, Middlebury bad-1 nonocc %%: %s" % (label, ", ".join(nonocc)))
+        sigma = fountain.get("synthetic fountain", {}).get(build, {})
+        if "within_3sigma" in sigma:
+            lines.append("- %s, synthetic fountain within 3σ: %.2f %% (D̂ %.2f %%)" % (
+                label, sigma["within_3sigma"], sigma["propagated_within_3sigma"]))
+    return ["", "## Accuracy", ""] + lines if lines else []
+
+
 def cell(obj, key, fmt="%.2f"):
     if "error" in obj:
         return "error"
@@ -981,7 +1315,7 @@ def main(argv=None):
         prog="benchmark.py", description=__doc__.split("\n\n")[0],
         epilog=__doc__[__doc__.index("Suites"):], formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--suite", choices=SUITES + ["all"], default="all",
-                        help="which suite to run (default: all, which leaves out scene)")
+                        help="which suite to run (default: all, which leaves out scene and speed)")
     parser.add_argument("--data", default=os.path.join("..", "shared", "data"),
                         help="benchmark data folder (default: ../shared/data)")
     parser.add_argument("--build", default="build",
@@ -996,13 +1330,22 @@ def main(argv=None):
                         "the same command (to resume an interrupted benchmark)")
     parser.add_argument("--timeout", type=int, default=3600,
                         help="seconds allowed per program run (default: 3600)")
+    parser.add_argument("--baseline-build", metavar="DIR",
+                        help="speed suite: a second build folder (e.g. of an older commit) whose "
+                        "gcpstereo also runs every timed run, for before/after figures")
+    parser.add_argument("--repeat", type=int, default=1, metavar="N",
+                        help="speed suite: run each timed run N times, report the median time and "
+                        "the largest peak memory (default: 1)")
     args = parser.parse_args(argv)
+    if args.repeat < 1:
+        parser.error("--repeat must be at least 1")
 
     runner = Runner(args)
-    for program in [runner.gcpstereo]:
+    baseline = Runner(args, build=args.baseline_build) if args.baseline_build else None
+    for program in [runner.gcpstereo] + ([baseline.gcpstereo] if baseline else []):
         if not os.access(program, os.X_OK):
             parser.error("%s not found: build it first (cmake --build %s --target gcpstereo)"
-                         % (program, args.build))
+                         % (program, os.path.dirname(program)))
     if not os.path.isdir(runner.data):
         parser.error("data folder %s not found (--data)" % runner.data)
 
@@ -1013,6 +1356,11 @@ def main(argv=None):
 
     scenes = [s for s in MIDDLEBURY if selected(s["name"], "middlebury")
               and os.path.isdir(middlebury_path(runner, s))]
+    for name in wanted:
+        scene = [s for s in MIDDLEBURY if s["name"] == name]
+        if scene and scene[0] not in scenes:
+            runner.log("no data for Middlebury scene %s (%s): left out"
+                       % (name, middlebury_path(runner, scene[0])))
     frames = [f for f in KITTI_FRAMES if selected(f, "kitti")]
     include_synthetic = selected("synthetic")
     include_fountain = selected("fountain")
@@ -1026,8 +1374,10 @@ def main(argv=None):
     results["environment"] = {"build": runner.build, "data": runner.data,
                               "host": platform.node(), "python": platform.python_version(),
                               "cpus": os.cpu_count(), "command": " ".join(sys.argv)}
-    # 'all' leaves out the scene suite (about 75 minutes on 2 cores)
-    suites = [s for s in SUITES if s != "scene"] if args.suite == "all" else [args.suite]
+    # 'all' leaves out the scene suite (about 75 minutes on 2 cores) and the speed suite (it times
+    # endtoend's runs again)
+    suites = ([s for s in SUITES if s not in ("scene", "speed")] if args.suite == "all"
+              else [args.suite])
     started = time.monotonic()
     for suite in suites:
         runner.log("suite %s: %d Middlebury scenes, %d KITTI frames" % (suite, len(scenes),
@@ -1040,6 +1390,9 @@ def main(argv=None):
             result = suite_table2(runner, scenes)
         elif suite == "endtoend":
             result = suite_endtoend(runner, scenes, frames, include_fountain)
+        elif suite == "speed":
+            result = suite_speed(runner, baseline, scenes, frames, include_fountain,
+                                 include_synthetic, args.repeat)
         else:
             result = suite_scene(runner, include_synthetic, include_fountain)
         result["seconds"] = time.monotonic() - t0
@@ -1056,7 +1409,8 @@ def main(argv=None):
         runner.log("suite %s done in %s -> %s" % (suite, fmt_seconds(result["seconds"]),
                                                   os.path.join(runner.out, suite + ".md")))
     runner.log("all done in %s (%d program runs); results in %s"
-               % (fmt_seconds(time.monotonic() - started), runner.count, results_path))
+               % (fmt_seconds(time.monotonic() - started),
+                  runner.count + (baseline.count if baseline else 0), results_path))
     return 0
 
 
