@@ -235,6 +235,7 @@ json TilesJson(const optimize::TiledResult& optimized) {
          {"expansion_seconds", e.time_seconds},
          {"initial_energy", e.initial_energy},
          {"energy_per_cycle", e.energy_per_cycle},
+         {"seconds_per_cycle", e.seconds_per_cycle},
          {"energy",
           {{"data", e.breakdown.data},
            {"smooth", e.breakdown.smooth},

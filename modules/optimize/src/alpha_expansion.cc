@@ -607,6 +607,7 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
   const double total_steps = static_cast<double>(options.max_cycles) * num_labels;
   for (int cycle = 0; cycle < options.max_cycles && !result.cancelled; ++cycle) {
     const double energy_at_start = energy;
+    const double cycle_start = timer.ElapsedSeconds();
     long long accepted_in_cycle = 0;
     for (int alpha = 0; alpha < num_labels; ++alpha) {
       const std::vector<int>* blocks = nullptr;
@@ -667,6 +668,7 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
       }
     }
     result.energy_per_cycle.push_back(energy);
+    result.seconds_per_cycle.push_back(timer.ElapsedSeconds() - cycle_start);
     result.cycles = cycle + 1;
     if (accepted_in_cycle == 0 ||
         energy_at_start - energy <= options.convergence_tolerance * std::abs(energy_at_start)) {
