@@ -234,11 +234,12 @@ cv::Mat RefineSubLabel(const MrfProblem& problem, const cv::Mat& labels,
     // Cholesky factorisation: the problem is a 2D grid (one unknown per pixel, 4-neighbour pairs)
     // whose normal matrix is diagonally dominant where the data or the prior is curved, so CG
     // converges in few steps, and the factor's fill-in (the nested-dissection separators of a grid)
-    // costs time and memory. Measured (safety checks off in both) on fountain-P11 view 0005 (configs/fountain_p11.yaml, four
-    // 776x520 tiles): the same final Ceres cost to 6 digits in every tile (1.40090e8, 1.18869e8,
-    // 2.79608e8, 1.81789e8), 4.0–5.5 s per tile instead of 6.5–10.1 s, peak memory of the run
-    // 2602 → 2428 MB; KITTI frame 10 (kitti_lidar.yaml): 4.0–4.5 s per tile instead of 5.3–5.4 s,
-    // peak 1244 → 1058 MB, held-out bad-3 unchanged (2.08 %).
+    // costs time and memory. Measured (safety checks off in both) on fountain-P11 view 0005
+    // (configs/fountain_p11.yaml, four 776x520 tiles): the same final Ceres cost to 6 digits in
+    // every tile (1.40090e8, 1.18869e8, 2.79608e8, 1.81789e8), 4.0–5.5 s per tile instead
+    // of 6.5–10.1 s, peak memory of the run 2602 → 2428 MB; KITTI frame 10
+    // (kitti_lidar.yaml): 4.0–4.5 s per tile instead of 5.3–5.4 s, peak 1244 → 1058 MB, held-out
+    // bad-3 unchanged (2.08 %).
     solver_options.linear_solver_type = ceres::CGNR;
     solver_options.preconditioner_type = ceres::JACOBI;
     solver_options.logging_type = ceres::SILENT;

@@ -76,10 +76,10 @@ struct ExpansionOptions {
 };
 
 struct ExpansionResult {
-  cv::Mat labels;                        // CV_32S, region-sized
-  EnergyBreakdown breakdown;             // of `labels`, from ComputeEnergy
-  double initial_energy = 0.0;           // of the initial labelling
-  std::vector<double> energy_per_cycle;  // energy after each completed cycle
+  cv::Mat labels;                         // CV_32S, region-sized
+  EnergyBreakdown breakdown;              // of `labels`, from ComputeEnergy
+  double initial_energy = 0.0;            // of the initial labelling
+  std::vector<double> energy_per_cycle;   // energy after each completed cycle
   std::vector<double> seconds_per_cycle;  // wall time of each completed cycle
   int cycles = 0;
   bool converged = false;            // a cycle improved by less than the tolerance (or not at all)
