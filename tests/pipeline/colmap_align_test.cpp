@@ -171,13 +171,7 @@ TEST_F(ColmapAlign, AlignedRunGivesTheTrueFrameDepth) {
   const cv::Mat a = io::ReadPfm(*dir_ + "/aligned_0005/depth.pfm");
   const cv::Mat b = io::ReadPfm(*dir_ + "/true_0005/depth.pfm");
   ASSERT_EQ(a.size(), b.size());
-  int same = 0;
-  for (int r = 0; r < a.rows; ++r) {
-    for (int c = 0; c < a.cols; ++c) {
-      const float x = a.at<float>(r, c), y = b.at<float>(r, c);
-      if ((std::isinf(x) && std::isinf(y)) || std::abs(x - y) <= 1e-3f * std::abs(y)) ++same;
-    }
-  }
+  const int same = testing::AgreeingDepthPixels(a, b, 1e-3f);
   EXPECT_GT(same, 0.99 * a.total()) << same << " of " << a.total();
   // dataset.align: none (the default) leaves the model where it is and reports no alignment.
   const json unaligned = Run("moved", "unaligned_load", {"runtime.stop_after=load"});

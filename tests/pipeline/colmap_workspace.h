@@ -3,6 +3,7 @@
 // another frame: what the COLMAP pipeline tests run on.
 #pragma once
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -13,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <opencv2/core.hpp>
 
 #include "gcpstereo/core/camera.h"
 #include "gcpstereo/core/types.h"
@@ -99,6 +101,19 @@ inline void WriteColmapWorkspace(
   std::ofstream(out + "/sparse/cameras.txt") << camera_file.str();
   std::ofstream(out + "/sparse/images.txt") << image_file.str();
   std::ofstream(out + "/sparse/points3D.txt") << points.str();
+}
+
+// Pixels where two depth maps of one size agree: both without depth (inf), or within `relative` of
+// the second's depth.
+inline int AgreeingDepthPixels(const cv::Mat& a, const cv::Mat& b, float relative) {
+  int same = 0;
+  for (int r = 0; r < a.rows; ++r) {
+    for (int c = 0; c < a.cols; ++c) {
+      const float x = a.at<float>(r, c), y = b.at<float>(r, c);
+      if ((std::isinf(x) && std::isinf(y)) || std::abs(x - y) <= relative * std::abs(y)) ++same;
+    }
+  }
+  return same;
 }
 
 }  // namespace gcpstereo::testing
