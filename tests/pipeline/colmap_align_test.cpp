@@ -33,6 +33,7 @@ namespace gcpstereo::pipeline {
 namespace {
 
 using gcpstereo::testing::ErrorOf;
+using gcpstereo::testing::FastTinySetting;
 using gcpstereo::testing::ReadFile;
 using gcpstereo::testing::WriteColmapWorkspace;
 using nlohmann::json;
@@ -80,21 +81,13 @@ class ColmapAlign : public ::testing::Test {
 
   static std::vector<std::string> Overrides(const std::string& workspace,
                                             const std::vector<std::string>& extra) {
-    std::vector<std::string> overrides = {"dataset.format=colmap",
-                                          "dataset.path=" + *dir_ + "/" + workspace,
-                                          "dataset.reference=0005.png",
-                                          "dataset.neighbors=[0004.png, 0006.png]",
-                                          "labels.count=48",
-                                          "labels.min=5",
-                                          "labels.max=14",
-                                          "gcp.sources=[lidar]",
-                                          "gcp.lidar.path=" + *dir_ + "/strecha/gt/laser.ply",
-                                          "gcp.downsample=8",
-                                          "optimizer.tiles=[1, 1]",
-                                          "optimizer.refinement=parabola",
-                                          "output.previews=false",
-                                          "output.mesh=false",
-                                          "runtime.log_level=warn"};
+    std::vector<std::string> overrides = {
+        "dataset.format=colmap",      "dataset.path=" + *dir_ + "/" + workspace,
+        "dataset.reference=0005.png", "dataset.neighbors=[0004.png, 0006.png]",
+        "output.previews=false",      "output.mesh=false",
+        "runtime.log_level=warn"};
+    const std::vector<std::string> fast = FastTinySetting(*dir_ + "/strecha/gt/laser.ply");
+    overrides.insert(overrides.end(), fast.begin(), fast.end());
     overrides.insert(overrides.end(), extra.begin(), extra.end());
     return overrides;
   }

@@ -32,6 +32,7 @@
 namespace gcpstereo::pipeline {
 namespace {
 
+using gcpstereo::testing::FastTinySetting;
 using gcpstereo::testing::ReadFile;
 using gcpstereo::testing::WriteColmapWorkspace;
 
@@ -58,16 +59,9 @@ class ColmapSceneRun : public ::testing::Test {
                   const std::vector<std::string>& extra) {
     std::vector<std::string> overrides = {"dataset.format=" + format,
                                           "dataset.path=" + *dir_ + "/" + format,
-                                          "labels.count=48",
-                                          "labels.min=5",
-                                          "labels.max=14",
-                                          "gcp.sources=[lidar]",
-                                          "gcp.lidar.path=" + *dir_ + "/strecha/gt/laser.ply",
-                                          "gcp.downsample=8",
-                                          "optimizer.tiles=[1, 1]",
-                                          "optimizer.refinement=parabola",
-                                          "scene_mesh.depth=7",
-                                          "runtime.log_level=warn"};
+                                          "scene_mesh.depth=7", "runtime.log_level=warn"};
+    const std::vector<std::string> fast = FastTinySetting(*dir_ + "/strecha/gt/laser.ply");
+    overrides.insert(overrides.end(), fast.begin(), fast.end());
     overrides.insert(overrides.end(), extra.begin(), extra.end());
     LoadedConfig config;
     config.Load("", overrides);

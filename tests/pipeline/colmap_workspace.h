@@ -103,6 +103,19 @@ inline void WriteColmapWorkspace(
   std::ofstream(out + "/sparse/points3D.txt") << points.str();
 }
 
+// The fast setting of the tiny preset's pipeline tests (scene_test.cpp): 48 labels, laser GCPs
+// from `laser_ply` one per 8×8 block, one tile, the parabola refinement.
+inline std::vector<std::string> FastTinySetting(const std::string& laser_ply) {
+  return {"labels.count=48",
+          "labels.min=5",
+          "labels.max=14",
+          "gcp.sources=[lidar]",
+          "gcp.lidar.path=" + laser_ply,
+          "gcp.downsample=8",
+          "optimizer.tiles=[1, 1]",
+          "optimizer.refinement=parabola"};
+}
+
 // Pixels where two depth maps of one size agree: both without depth (inf), or within `relative` of
 // the second's depth.
 inline int AgreeingDepthPixels(const cv::Mat& a, const cv::Mat& b, float relative) {
