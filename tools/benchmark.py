@@ -78,6 +78,8 @@ import sys
 import time
 import zlib
 
+from file_formats import header_tokens
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 # ---------------------------------------------------------------------------------------------
@@ -143,22 +145,13 @@ def read_pgm(path):
     """Binary PGM (P5, maxval <= 65535) -> (width, height, list of ints, row-major)."""
     with open(path, "rb") as f:
         data = f.read()
-    tokens, pos = [], 0
-    while len(tokens) < 4:
-        while data[pos:pos + 1].isspace():
-            pos += 1
-        if data[pos:pos + 1] == b"#":
-            while data[pos:pos + 1] not in (b"\n", b""):
-                pos += 1
-            continue
-        start = pos
-        while not data[pos:pos + 1].isspace():
-            pos += 1
-        tokens.append(data[start:pos])
+    try:
+        tokens, pos = header_tokens(data, 4)
+    except ValueError as e:
+        raise BenchError("%s: %s" % (path, e))
     if tokens[0] != b"P5":
         raise BenchError("%s: not a binary PGM (P5)" % path)
     width, height, maxval = int(tokens[1]), int(tokens[2]), int(tokens[3])
-    pos += 1  # the single whitespace after maxval
     if maxval < 256:
         values = list(data[pos:pos + width * height])
     else:

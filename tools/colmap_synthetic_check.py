@@ -25,52 +25,15 @@ free of the two cameras' different depth axes, but blind to a point slid along t
 Results are printed as JSON.
 """
 
-import array
 import json
 import math
 import os
 import struct
 import sys
 
+from file_formats import read_pfm, read_strecha_camera
+
 # ---------------------------------------------------------------- files
-
-
-def read_pfm(path):
-    """(width, height, rows top to bottom as a flat array('f'))."""
-    with open(path, "rb") as f:
-        data = f.read()
-    tokens, pos = [], 0
-    while len(tokens) < 4:
-        while data[pos:pos + 1].isspace():
-            pos += 1
-        start = pos
-        while not data[pos:pos + 1].isspace():
-            pos += 1
-        tokens.append(data[start:pos].decode())
-    pos += 1  # the single whitespace after the scale
-    if tokens[0] != "Pf":
-        sys.exit(f"error: {path}: not a one-channel PFM (magic {tokens[0]})")
-    width, height, scale = int(tokens[1]), int(tokens[2]), float(tokens[3])
-    values = array.array("f")
-    values.frombytes(data[pos:pos + 4 * width * height])
-    if len(values) != width * height:
-        sys.exit(f"error: {path}: truncated PFM")
-    if (scale < 0) != (sys.byteorder == "little"):
-        values.byteswap()
-    top_down = array.array("f")
-    for row in range(height - 1, -1, -1):  # PFM stores rows bottom to top
-        top_down.extend(values[row * width:(row + 1) * width])
-    return width, height, top_down
-
-
-def read_strecha_camera(path):
-    """K (3x3), R world_from_camera (3x3), centre (3), (width, height); as io's reader."""
-    with open(path) as f:
-        lines = [l.split() for l in f if l.strip()]
-    if len(lines) != 9:
-        sys.exit(f"error: {path}: expected 9 lines (K, distortion, R, C, size)")
-    num = [[float(v) for v in l] for l in lines]
-    return {"K": num[0:3], "R": num[4:7], "C": num[7], "size": (int(num[8][0]), int(num[8][1]))}
 
 
 def read_colmap_bin(sparse):
@@ -437,4 +400,7 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    try:
+        main(sys.argv[1:])
+    except ValueError as e:  # a malformed input file (file_formats)
+        sys.exit("error: %s" % e)

@@ -19,34 +19,7 @@ import os
 import struct
 import sys
 
-
-def read_pfm(path):
-    """(width, height, rows top to bottom) of a one-channel PFM."""
-    with open(path, 'rb') as f:
-        data = f.read()
-    tokens, pos = [], 0
-    while len(tokens) < 4:
-        while data[pos:pos + 1].isspace():
-            pos += 1
-        start = pos
-        while not data[pos:pos + 1].isspace():
-            pos += 1
-        tokens.append(data[start:pos].decode())
-        pos += 1  # the single whitespace after each token
-    if tokens[0] != 'Pf':
-        raise SystemExit(path + ': not a one-channel PFM')
-    width, height, scale = int(tokens[1]), int(tokens[2]), float(tokens[3])
-    values = struct.unpack(('<' if scale < 0 else '>') + '%df' % (width * height),
-                           data[pos:pos + 4 * width * height])
-    rows = [values[r * width:(r + 1) * width] for r in range(height)]
-    rows.reverse()  # PFM rows are stored bottom to top
-    return width, height, rows
-
-
-def read_strecha_camera(path):
-    """K, R (camera-to-world), C, width, height of a Strecha .camera file."""
-    numbers = [list(map(float, line.split())) for line in open(path) if line.strip()]
-    return numbers[0:3], numbers[4:7], numbers[7], int(numbers[8][0]), int(numbers[8][1])
+from file_formats import read_pfm, read_strecha_camera
 
 
 def read_ply_points(path):
@@ -90,7 +63,8 @@ def main():
     data = sys.argv[1]
     views = []
     for name in sorted(os.listdir(os.path.join(data, 'cameras'))):
-        K, R, C, width, height = read_strecha_camera(os.path.join(data, 'cameras', name))
+        camera = read_strecha_camera(os.path.join(data, 'cameras', name))
+        K, R, C, (width, height) = camera['K'], camera['R'], camera['C'], camera['size']
         gt_width, gt_height, gt = read_pfm(
             os.path.join(data, 'gt', name.split('.')[0] + '.depth.pfm'))
         if (gt_width, gt_height) != (width, height):
@@ -113,7 +87,7 @@ def main():
                 v = K[1][1] * x[1] / x[2] + K[1][2]
                 col, row = int(round(u)), int(round(v))
                 if 0 <= col < width and 0 <= row < height:
-                    z = gt[row][col]
+                    z = gt[row * width + col]
                     if math.isfinite(z) and z > 0:
                         best = min(best, abs(x[2] - z))
             errors.append(best)
@@ -129,4 +103,7 @@ def main():
 
 
 if __name__ == '__main__':
-    main()
+    try:
+        main()
+    except ValueError as e:  # a malformed input file (file_formats)
+        raise SystemExit('error: %s' % e)
