@@ -67,7 +67,13 @@ json ReportOf(const align::AlignmentResult& r, const std::string& target,
                  {"seconds", r.seconds},
                  {"max_residual", options.max_residual},
                  {"min_inlier_share", options.min_inlier_share}};
-  if (r.method == "scan") report["max_relative_residual"] = options.max_relative_residual;
+  if (r.method == "scan") {
+    report["max_relative_residual"] = options.max_relative_residual;
+    report["restarts"] = r.restarts;
+    report["restarts_alike"] = r.restarts_alike;
+    report["ambiguity"] = r.ambiguity;
+    report["ambiguity_probes"] = r.ambiguity_probes;
+  }
   if (centres) {
     json per_centre = json::array();
     for (size_t i = 0; i < centres->size() && i < r.residuals.size(); ++i) {
@@ -116,9 +122,11 @@ ModelAlignment Estimate(const PipelineConfig& o) {
     std::vector<Eigen::Vector3d> points;
     points.reserve(model.points3d.size());
     for (const auto& [id, point] : model.points3d) points.push_back(point.xyz_world);
+    std::vector<Eigen::Vector3d> model_centres;
+    for (const auto& [id, image] : model.images) model_centres.push_back(image.CenterWorld());
     const PointCloud scan = io::ReadPointCloud(target);
     try {
-      result = align::AlignToScan(points, scan, options);
+      result = align::AlignToScan(points, scan, options, model_centres);
     } catch (const Error& e) {
       throw Error("dataset.align = scan: " + target + ": " + e.what());
     }

@@ -87,7 +87,8 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("dataset.align_max_residual", &dataset.align_options.max_residual, Range::GreaterThan(0.0),
          {"dataset.align: a model point within this of its nearest scan point (a camera centre "
           "within this of its known position) is an inlier; the median residual must not exceed "
-          "it",
+          "it; scan: nor may restarts from perturbed poses that fit as well move a camera centre "
+          "further (ambiguity)",
           "m"});
   s->Add("dataset.align_min_inlier_share", &dataset.align_options.min_inlier_share,
          Range::Between(0.0, 1.0),

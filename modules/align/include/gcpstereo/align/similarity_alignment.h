@@ -11,8 +11,13 @@
 //     convergence against the whole scan, last by point-to-plane steps with scale (Chen &
 //     Medioni, "Object modelling by registration of multiple range images", 1992), which do not
 //     stall along planes as point-to-point ICP does.
-// Neither decides alone whether the result is good enough: CheckAlignment refuses a poor one with
-// its residuals (a wrong frame must never pass silently).
+//     The fine stage is then restarted from a fixed set of perturbed poses (rotations about, and
+//     shifts along, the aligned model's principal axes, and scale changes); the best-scoring
+//     restart wins, and the spread of those that score about as well as it (the camera centres'
+//     largest displacement between them) measures how well the scan pins the model down: a model
+//     that can slide or turn along a wall without a worse fit is ambiguous.
+// Neither decides alone whether the result is good enough: CheckAlignment refuses a poor or an
+// ambiguous one with its residuals (a wrong frame must never pass silently).
 #pragma once
 
 #include <cstdint>
@@ -87,6 +92,16 @@ struct AlignmentResult {
   std::vector<double> residuals;
   int hypotheses = 0;  // scan: coarse hypotheses tried; centres: RANSAC samples drawn
   int iterations = 0;  // scan: ICP iterations of the final refinement
+  // Scan: the fine stage's restarts from perturbed poses, how many of them converged to a score
+  // about as good as the best's (the median of the distances to the scan's tangent planes within
+  // the 95 % confidence interval of the best's median, from the order statistics), and the largest
+  // displacement of a probe (a camera centre, or else an inlier model point) between the chosen
+  // transform and any of those, world units: how far the scan leaves the model free to move.
+  // CheckAlignment refuses the alignment when it exceeds max_residual.
+  int restarts = 0;
+  int restarts_alike = 0;
+  double ambiguity = 0.0;
+  std::string ambiguity_probes;  // "camera centres" or "model points"
   double seconds = 0.0;
 
   // "scale 0.37, rotation 40.0°, translation (1, 2, 3); residuals median 0.002, 90th percentile
@@ -104,13 +119,25 @@ AlignmentResult AlignToKnownPoints(const std::vector<Eigen::Vector3d>& model,
                                    const AlignmentOptions& options);
 
 // The similarity registering `model_points` (a reconstruction's 3D points, any frame and scale) to
-// `scan` (world frame). Throws Error for fewer than three finite points in either.
+// `scan` (world frame). `model_centres` (the reconstruction's camera centres, model frame; may be
+// empty) are the probes of AlignmentResult::ambiguity: where the cameras land decides the depth
+// maps. Without them the inlier model points are the probes. Throws Error for fewer than three
+// finite points in either cloud.
 AlignmentResult AlignToScan(const std::vector<Eigen::Vector3d>& model_points,
-                            const PointCloud& scan, const AlignmentOptions& options);
+                            const PointCloud& scan, const AlignmentOptions& options,
+                            const std::vector<Eigen::Vector3d>& model_centres = {});
+
+// The residual statistics (method "scan") of `model_points` moved by a given `world_from_model`
+// against `scan`, as AlignToScan computes them for its own result: e.g. to score a transform known
+// otherwise (from camera centres) on the same objective.
+AlignmentResult EvaluateOnScan(const std::vector<Eigen::Vector3d>& model_points,
+                               const PointCloud& scan, const Similarity& world_from_model,
+                               const AlignmentOptions& options);
 
 // Throws Error ("<what>: alignment refused: ..." with the residuals, inlier share and the
 // thresholds) when the inlier share is below options.min_inlier_share, the median residual above
-// options.max_residual or (scan) its relative value above options.max_relative_residual.
+// options.max_residual, (scan) its relative value above options.max_relative_residual, or (scan)
+// the ambiguity above options.max_residual (the message then advises dataset.align: centres).
 void CheckAlignment(const AlignmentResult& result, const AlignmentOptions& options,
                     const std::string& what);
 
