@@ -101,6 +101,7 @@ int Synth(const SynthArgs& args) {
   synth::SynthOptions options;
   options.preset = args.preset;
   options.seed = args.seed;
+  options.views = args.views;
   options.Check();
   synth::SyntheticScene scene;
   {

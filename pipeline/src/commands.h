@@ -42,6 +42,7 @@ struct SynthArgs {
   std::string preset;
   std::string output_dir;
   std::uint64_t seed = 1;
+  int views = 0;  // 0 = the preset's cameras (synth::SynthOptions::views)
 };
 int Synth(const SynthArgs& args);
 

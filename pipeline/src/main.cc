@@ -16,6 +16,7 @@
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
 #include "gcpstereo/core/progress.h"
+#include "gcpstereo/synth/generator.h"
 
 namespace {
 
@@ -108,7 +109,7 @@ int main(int argc, char** argv) {
       app.add_subcommand("synth", "write a synthetic data set with exact ground truth");
   synth
       ->add_option("--preset", synth_args.preset,
-                   "tiny (~160x107), small (~640x427) or fountain "
+                   "tiny (5 views, 160x107), small (7 views, 640x427) or fountain "
                    "(11 views, 1536x1024)")
       ->required()
       ->check(CLI::IsMember({"tiny", "small", "fountain"}));
@@ -131,6 +132,34 @@ int main(int argc, char** argv) {
             return std::string();
           },
           "UINT64"));
+
+  synth
+      ->add_option("--views", synth_args.views,
+                   "number of views: 0 = the preset's cameras; N = " +
+                       std::to_string(gcpstereo::synth::kMinSynthViews) + ".." +
+                       std::to_string(gcpstereo::synth::kMaxSynthViews) +
+                       " cameras evenly spaced over the preset's arc, named in arc order, the "
+                       "reference 0005 the head-on one or, past 5 left of it, the sixth")
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            int views = -1;
+            try {
+              size_t used = 0;
+              views = std::stoi(text, &used);
+              if (used != text.size()) views = -1;
+            } catch (const std::exception&) {
+              views = -1;
+            }
+            if (views == 0 || (views >= gcpstereo::synth::kMinSynthViews &&
+                               views <= gcpstereo::synth::kMaxSynthViews)) {
+              return std::string();
+            }
+            return "0 (the preset's cameras) or " +
+                   std::to_string(gcpstereo::synth::kMinSynthViews) + ".." +
+                   std::to_string(gcpstereo::synth::kMaxSynthViews) + ", got " + text;
+          },
+          "INT"));
 
   gcpstereo::cli::DemoArgs demo_args;
   CLI::App* demo = app.add_subcommand(

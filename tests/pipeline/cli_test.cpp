@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -196,6 +197,48 @@ TEST(Cli, EvalCameraOfAnotherAspectRatioIsRefused) {
                           " is 320x240 and the depth map " + depth +
                           " 160x107: another aspect ratio (scaled to the map's width, x0.5, the "
                           "camera is 120 px high, not 107); the camera is of another image\n");
+}
+
+// synth --views N: N views in arc order around the reference 0005, which gt/scene.json names
+// and the scene's views list; a count out of range is one line naming the option, nothing
+// written.
+TEST(Cli, SynthViewsWritesThatManyViews) {
+  const fs::path dir = testing::MakeTempDir("gcpstereo-cli-synth-views");
+  for (const char* bad : {"2", "100", "-1", "7x"}) {
+    const Result r = RunCli("synth --preset tiny --views " + std::string(bad) + " -q -o " +
+                            (dir / "bad").string());
+    EXPECT_NE(r.status, 0) << bad;
+    EXPECT_EQ(r.output, "gcpstereo: error: --views: 0 (the preset's cameras) or 3..99, got " +
+                            std::string(bad) +
+                            " (gcpstereo --help lists the commands and options)\n")
+        << bad;
+    EXPECT_FALSE(fs::exists(dir / "bad")) << bad;
+  }
+  const fs::path data = dir / "data";
+  const Result r = RunCli("synth --preset tiny --views 6 -q -o " + data.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  // tiny's arc −20.5° … +21.4° in steps of 8.4°: the third camera (−3.7°) is the head-on one.
+  for (const char* name : {"0003", "0004", "0005", "0006", "0007", "0008"}) {
+    EXPECT_TRUE(fs::exists(data / "images" / (std::string(name) + ".png"))) << name;
+    EXPECT_TRUE(fs::exists(data / "cameras" / (std::string(name) + ".png.camera"))) << name;
+    EXPECT_TRUE(fs::exists(data / "gt" / (std::string(name) + ".depth.pfm"))) << name;
+  }
+  EXPECT_FALSE(fs::exists(data / "images" / "0002.png"));
+  EXPECT_FALSE(fs::exists(data / "images" / "0009.png"));
+  std::ifstream in(data / "gt" / "scene.json");
+  const std::string scene((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(scene.find("\"reference\": \"0005\""), std::string::npos) << scene;
+  EXPECT_NE(scene.find("\"0008\""), std::string::npos) << scene;
+  const std::string config = WriteFile(
+      dir / "c.yaml", "dataset:\n  format: strecha\n  path: " + data.string() +
+                          "\n  reference: all\n  neighbors: auto\nlabels:\n  count: 32\n");
+  const Result views = RunCli("views " + config, /*with_stdout=*/true);
+  ASSERT_EQ(views.status, 0) << views.output;
+  for (const char* name : {"0003", "0004", "0005", "0006", "0007", "0008"}) {
+    EXPECT_NE(views.output.find("\"name\": \"" + std::string(name) + "\""), std::string::npos)
+        << name << " in\n"
+        << views.output;
+  }
 }
 
 TEST(Cli, FuseOfAFolderThatIsNoViewIsOneLineNamingTheFile) {

@@ -1,7 +1,10 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -193,6 +196,162 @@ TEST(SynthGeneratorTest, SmallerPresetsAreSubsetsOfTheFountainArc) {
   EXPECT_EQ(MakePresetGeometry("small").cameras.size(), 7u);
 }
 
+// The angle of a camera centre about the look-at point, degrees (0 = in front of the wall,
+// positive to the right), and its horizontal distance from it: the stations' coordinates.
+double StationAngleDeg(const PresetGeometry& g, const Camera& c) {
+  const Vector3d d = c.center_world - g.look_at_world;
+  return std::atan2(d.x(), -d.y()) * 180.0 / M_PI;
+}
+double StationDistance(const PresetGeometry& g, const Camera& c) {
+  const Vector3d d = c.center_world - g.look_at_world;
+  return std::hypot(d.x(), d.y());
+}
+
+// views = 0 keeps each preset's own stations: fountain-P11's uneven angles, distances and
+// heights, written out here so that a change to the default geometry fails.
+TEST(SynthGeneratorTest, DefaultViewsAreThePresetsOwnStations) {
+  EXPECT_EQ(SynthOptions().views, 0);
+  const double angle_deg[11] = {-52.0, -41.5, -30.5, -20.5, -10.4, 0.0,
+                                10.9,  21.4,  32.6,  43.0,  53.5};
+  const double distance_m[11] = {9.7, 9.5, 9.2, 9.0, 8.8, 8.9, 8.7, 8.8, 9.1, 9.4, 9.6};
+  const double height_m[11] = {1.62, 1.66, 1.60, 1.70, 1.64, 1.68, 1.72, 1.63, 1.67, 1.61, 1.65};
+  const struct {
+    const char* preset;
+    int first, count;
+  } presets[] = {{"tiny", 3, 5}, {"small", 2, 7}, {"fountain", 0, 11}};
+  for (const auto& p : presets) {
+    const PresetGeometry g = MakePresetGeometry(p.preset, 0);
+    ASSERT_EQ(g.cameras.size(), static_cast<size_t>(p.count)) << p.preset;
+    EXPECT_EQ(g.reference_index, 5 - p.first) << p.preset;
+    for (int k = 0; k < p.count; ++k) {
+      const int i = p.first + k;
+      char name[8];
+      std::snprintf(name, sizeof(name), "%04d", i);
+      EXPECT_EQ(g.view_names[k], name) << p.preset;
+      EXPECT_NEAR(StationAngleDeg(g, g.cameras[k]), angle_deg[i], 1e-9) << p.preset << " " << i;
+      EXPECT_NEAR(StationDistance(g, g.cameras[k]), distance_m[i], 1e-9) << p.preset << " " << i;
+      EXPECT_NEAR(g.cameras[k].center_world.z(), height_m[i], 1e-12) << p.preset << " " << i;
+    }
+  }
+}
+
+// views = N: N cameras evenly spaced over the preset's arc at the preset's distances, named in
+// arc order with consecutive 4-digit numbers, "0005" the reference and the laser's.
+TEST(SynthGeneratorTest, ViewsOptionSpreadsNCamerasOverThePresetsArc) {
+  for (const char* preset : {"tiny", "small", "fountain"}) {
+    const PresetGeometry own = MakePresetGeometry(preset);
+    const double arc_begin = StationAngleDeg(own, own.cameras.front());
+    const double arc_end = StationAngleDeg(own, own.cameras.back());
+    double min_distance = 1e9, max_distance = 0.0;
+    for (const Camera& c : own.cameras) {
+      min_distance = std::min(min_distance, StationDistance(own, c));
+      max_distance = std::max(max_distance, StationDistance(own, c));
+    }
+    for (int n : {3, 4, 6, 7, 11, 12, 21, 31, 99}) {
+      SCOPED_TRACE(std::string(preset) + " with " + std::to_string(n) + " views");
+      const PresetGeometry g = MakePresetGeometry(preset, n);
+      ASSERT_EQ(g.cameras.size(), static_cast<size_t>(n));
+      ASSERT_EQ(g.view_names.size(), static_cast<size_t>(n));
+      ASSERT_GE(g.reference_index, 0);
+      ASSERT_LT(g.reference_index, n);
+      EXPECT_EQ(g.view_names[g.reference_index], "0005");
+      const int first_number = std::stoi(g.view_names.front());
+      EXPECT_GE(first_number, 0);
+      const double step = (arc_end - arc_begin) / (n - 1);
+      int head_on = 0;
+      for (int k = 0; k < n; ++k) {
+        char name[8];
+        std::snprintf(name, sizeof(name), "%04d", first_number + k);
+        EXPECT_EQ(g.view_names[k], name);
+        const Camera& c = g.cameras[k];
+        EXPECT_EQ(c.width, own.cameras[0].width);
+        EXPECT_EQ(c.height, own.cameras[0].height);
+        EXPECT_EQ(c.K, own.cameras[0].K);
+        EXPECT_NO_THROW(c.Validate("camera " + g.view_names[k]));
+        const double angle = StationAngleDeg(g, c);
+        EXPECT_NEAR(angle, arc_begin + k * step, 1e-9) << "view " << k;
+        if (std::abs(angle) < std::abs(StationAngleDeg(g, g.cameras[head_on]))) head_on = k;
+        const double distance = StationDistance(g, c);
+        EXPECT_GE(distance, min_distance - 1e-9);
+        EXPECT_LE(distance, max_distance + 1e-9);
+        Eigen::Vector2d px;
+        double depth;
+        ASSERT_TRUE(c.Project(g.look_at_world, &px, &depth));
+        EXPECT_TRUE(c.InImage(px));
+      }
+      // The arc's ends are the preset's first and last stations.
+      EXPECT_LT((g.cameras.front().center_world - own.cameras.front().center_world).norm(), 1e-9);
+      EXPECT_LT((g.cameras.back().center_world - own.cameras.back().center_world).norm(), 1e-9);
+      // "0005" is the head-on camera, or the sixth when more than five lie left of it.
+      EXPECT_EQ(g.reference_index, std::min(head_on, 5));
+      EXPECT_EQ(first_number, 5 - g.reference_index);
+      // The scanner stands beside the reference camera, as in the preset.
+      const Camera& ref = g.cameras[g.reference_index];
+      const double offset = (g.scanner_center_world - ref.center_world).norm();
+      EXPECT_NEAR(offset,
+                  (own.scanner_center_world - own.cameras[own.reference_index].center_world).norm(),
+                  1e-9);
+      // Scene constants do not change with the number of views.
+      EXPECT_EQ(g.texture_min_wavelength_m, own.texture_min_wavelength_m);
+      EXPECT_EQ(g.default_laser_angular_step_rad, own.default_laser_angular_step_rad);
+      EXPECT_EQ(g.mesh_max_chord_error_m, own.mesh_max_chord_error_m);
+    }
+  }
+  // On the fountain's arc "0005" is head-on up to 11 views and the sixth beyond.
+  EXPECT_LT(std::abs(StationAngleDeg(MakePresetGeometry("fountain", 11),
+                                     MakePresetGeometry("fountain", 11).cameras[5])),
+            1.0);
+  const PresetGeometry fountain31 = MakePresetGeometry("fountain", 31);
+  EXPECT_EQ(fountain31.view_names.front(), "0000");
+  EXPECT_EQ(fountain31.view_names.back(), "0030");
+  EXPECT_EQ(fountain31.reference_index, 5);
+  const PresetGeometry tiny3 = MakePresetGeometry("tiny", 3);
+  EXPECT_EQ(tiny3.view_names, (std::vector<std::string>{"0004", "0005", "0006"}));
+}
+
+// A generated scene with N views: N images with their ground truth, the laser fired from beside
+// "0005" and covering it.
+TEST(SynthGeneratorTest, ViewsOptionGeneratesNViews) {
+  SynthOptions options;
+  options.preset = "tiny";
+  options.supersampling = 1;
+  options.views = 8;
+  const SyntheticScene s = GenerateScene(options);
+  const PresetGeometry g = MakePresetGeometry("tiny", 8);
+  ASSERT_EQ(s.views.size(), 8u);
+  ASSERT_EQ(s.depth.size(), 8u);
+  ASSERT_EQ(s.sigma.size(), 8u);
+  EXPECT_EQ(s.summary.num_views, 8);
+  EXPECT_EQ(s.reference_index, g.reference_index);
+  EXPECT_EQ(s.views[s.reference_index].name, "0005");
+  EXPECT_EQ(s.summary.reference_name, "0005");
+  EXPECT_LT((s.laser_scanner_world - g.scanner_center_world).norm(), 1e-12);
+  for (size_t v = 0; v < s.views.size(); ++v) {
+    EXPECT_EQ(s.views[v].name, g.view_names[v]);
+    EXPECT_EQ(s.views[v].image.cols, 160);
+    EXPECT_EQ(s.views[v].image.rows, 107);
+    EXPECT_EQ(s.depth[v].size(), s.views[v].image.size());
+    EXPECT_LT((s.views[v].camera.center_world - g.cameras[v].center_world).norm(), 1e-12);
+  }
+  // The scan covers the reference view as it does the preset's (laser_test.cpp): a laser point
+  // in more than 90 % of its 8×8 pixel blocks.
+  const Camera& ref = s.views[s.reference_index].camera;
+  const int bw = (ref.width + 7) / 8, bh = (ref.height + 7) / 8;
+  std::vector<int> hits(bw * bh, 0);
+  for (const auto& p : s.laser.points) {
+    Eigen::Vector2d px;
+    double depth;
+    if (!ref.Project(p.cast<double>(), &px, &depth) || !ref.InImage(px)) continue;
+    const int c = std::lround(px.x()), r = std::lround(px.y());
+    ++hits[(r / 8) * bw + c / 8];
+  }
+  int covered = 0;
+  for (int h : hits) covered += h > 0;
+  EXPECT_GT(covered, 0.9 * bw * bh) << covered << " of " << bw * bh << " blocks";
+  options.views = 0;
+  EXPECT_EQ(GenerateScene(options).views.size(), 5u);
+}
+
 TEST(SynthGeneratorTest, OptionsCheckNamesTheKey) {
   auto message = [](const SynthOptions& o) -> std::string {
     try {
@@ -222,6 +381,23 @@ TEST(SynthGeneratorTest, OptionsCheckNamesTheKey) {
   o.laser_sigma_per_m = std::nan("");
   EXPECT_NE(message(o).find("synth.laser_sigma_per_m = nan"), std::string::npos);
   EXPECT_THROW(MakePresetGeometry("medium"), ConfigError);
+  for (int views : {-1, 1, 2, 100}) {
+    o = SynthOptions();
+    o.views = views;
+    EXPECT_EQ(message(o), "synth.views = " + std::to_string(views) +
+                              ". Violated constraint: views == 0 (the preset's cameras) or 3 <= "
+                              "views <= 99");
+    try {
+      MakePresetGeometry("tiny", views);
+      ADD_FAILURE() << "views " << views << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(std::string(e.what()), message(o));
+    }
+  }
+  for (int views : {0, 3, 99}) {
+    o.views = views;
+    EXPECT_EQ(message(o), "") << views;
+  }
 }
 
 TEST(SynthGeneratorTest, ProgressIsReportedAndCanCancel) {

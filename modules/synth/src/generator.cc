@@ -11,6 +11,7 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -227,6 +228,11 @@ LaserResult SimulateLaser(const AnalyticScene& scene, const Camera& reference,
   return result;
 }
 
+std::string ViewsConstraint() {
+  return "views == 0 (the preset's cameras) or " + std::to_string(kMinSynthViews) +
+         " <= views <= " + std::to_string(kMaxSynthViews);
+}
+
 }  // namespace
 
 void SynthOptions::Check() const {
@@ -247,6 +253,9 @@ void SynthOptions::Check() const {
   if (!(exposure_offset_variation >= 0.0 && exposure_offset_variation <= 20.0)) {
     fail("synth.exposure_offset_variation", FormatNumber(exposure_offset_variation),
          "0 <= exposure_offset_variation <= 20");
+  }
+  if (views != 0 && (views < kMinSynthViews || views > kMaxSynthViews)) {
+    fail("synth.views", std::to_string(views), ViewsConstraint());
   }
   if (supersampling < 0 || supersampling > 8) {
     fail("synth.supersampling", std::to_string(supersampling), "0 <= supersampling <= 8");
@@ -277,7 +286,7 @@ double LaserSigma(const SynthOptions& options, double range_m) {
   return options.laser_sigma_constant_m + options.laser_sigma_per_m * range_m;
 }
 
-PresetGeometry MakePresetGeometry(const std::string& preset) {
+PresetGeometry MakePresetGeometry(const std::string& preset, int num_views) {
   // Full-size geometry, then scaled: f ≈ 1380 px at 1536×1024 (58° horizontal field of view, like
   // fountain-P11 at half resolution); 11 cameras on an arc converging on the fountain, 8.6–9.8 m
   // from the look-at point, 1.5–1.9 m apart, at eye height with varied tilt, like the real survey.
@@ -302,19 +311,58 @@ PresetGeometry MakePresetGeometry(const std::string& preset) {
     throw ConfigError(
         ViolatedConstraint("synth.preset", "'" + preset + "'", "one of tiny, small, fountain"));
   }
+  if (num_views != 0 && (num_views < kMinSynthViews || num_views > kMaxSynthViews)) {
+    throw ConfigError(
+        ViolatedConstraint("synth.views", std::to_string(num_views), ViewsConstraint()));
+  }
   const double scale = width / 1536.0;
   const double f_full = 1381.0, fy_full = 1383.5, cx_full = 759.6, cy_full = 503.2;
   // Angles (degrees, about the look-at point, 0 = straight in front of the wall, positive to the
   // right) and distances of the 11 stations; heights vary a little as a hand-held survey would.
-  const double angle_deg[11] = {-52.0, -41.5, -30.5, -20.5, -10.4, 0.0,
-                                10.9,  21.4,  32.6,  43.0,  53.5};
-  const double distance_m[11] = {9.7, 9.5, 9.2, 9.0, 8.8, 8.9, 8.7, 8.8, 9.1, 9.4, 9.6};
-  const double height_m[11] = {1.62, 1.66, 1.60, 1.70, 1.64, 1.68, 1.72, 1.63, 1.67, 1.61, 1.65};
+  constexpr int kStations = 11;
+  const double angle_deg[kStations] = {-52.0, -41.5, -30.5, -20.5, -10.4, 0.0,
+                                       10.9,  21.4,  32.6,  43.0,  53.5};
+  const double distance_m[kStations] = {9.7, 9.5, 9.2, 9.0, 8.8, 8.9, 8.7, 8.8, 9.1, 9.4, 9.6};
+  const double height_m[kStations] = {1.62, 1.66, 1.60, 1.70, 1.64, 1.68,
+                                      1.72, 1.63, 1.67, 1.61, 1.65};
   g.look_at_world = Vector3d(0.0, -2.2, 1.9);
-  for (int i = first; i < first + count; ++i) {
-    const double a = angle_deg[i] * kPi / 180.0;
-    const Vector3d center(g.look_at_world.x() + distance_m[i] * std::sin(a),
-                          g.look_at_world.y() - distance_m[i] * std::cos(a), height_m[i]);
+
+  // One station: its angle, distance and height, and its number (the view's name and the key of
+  // its aiming jitter and of its image noise).
+  struct Station {
+    double angle_deg, distance_m, height_m;
+    int number;
+  };
+  std::vector<Station> stations;
+  if (num_views == 0) {
+    for (int i = first; i < first + count; ++i) {
+      stations.push_back({angle_deg[i], distance_m[i], height_m[i], i});
+    }
+  } else {
+    // Evenly spaced over the preset's arc; distance and height interpolated between the two
+    // stations around each angle.
+    const double arc_begin = angle_deg[first], arc_end = angle_deg[first + count - 1];
+    const double step = (arc_end - arc_begin) / (num_views - 1);
+    int nearest_head_on = 0;
+    for (int k = 0; k < num_views; ++k) {
+      const double a = k + 1 == num_views ? arc_end : arc_begin + k * step;
+      int i = 0;
+      while (i + 2 < kStations && angle_deg[i + 1] <= a) ++i;
+      const double t = std::clamp((a - angle_deg[i]) / (angle_deg[i + 1] - angle_deg[i]), 0.0, 1.0);
+      stations.push_back({a, distance_m[i] + t * (distance_m[i + 1] - distance_m[i]),
+                          height_m[i] + t * (height_m[i + 1] - height_m[i]), 0});
+      if (std::abs(a) < std::abs(stations[nearest_head_on].angle_deg)) nearest_head_on = k;
+    }
+    // The reference "0005": the head-on station, unless more than five lie left of it (names
+    // are non-negative and in arc order); then the sixth.
+    const int reference = std::min(nearest_head_on, 5);
+    for (int k = 0; k < num_views; ++k) stations[k].number = 5 - reference + k;
+  }
+  for (const Station& station : stations) {
+    const int i = station.number;
+    const double a = station.angle_deg * kPi / 180.0;
+    const Vector3d center(g.look_at_world.x() + station.distance_m * std::sin(a),
+                          g.look_at_world.y() - station.distance_m * std::cos(a), station.height_m);
     // Aim at points spread a little around the look-at point (hand-held aiming).
     const Vector3d target =
         g.look_at_world + Vector3d(0.15 * std::sin(3.0 * i), 0.0, 0.25 * std::cos(2.0 * i));
@@ -324,9 +372,9 @@ PresetGeometry MakePresetGeometry(const std::string& preset) {
     camera.height = height;
     std::ostringstream name;
     name << std::setw(4) << std::setfill('0') << i;
+    if (i == 5) g.reference_index = static_cast<int>(g.cameras.size());
     g.view_names.push_back(name.str());
     g.cameras.push_back(camera);
-    if (i == 5) g.reference_index = i - first;
   }
   // The scanner: a tripod 0.4 m right of, 0.3 m behind and 0.25 m below the reference camera.
   const Camera& ref = g.cameras[g.reference_index];
@@ -357,7 +405,7 @@ std::string SynthSummary::FullReport() const {
 SyntheticScene GenerateScene(const SynthOptions& options, const ProgressCallback& progress) {
   options.Check();
   Timer total_timer;
-  const PresetGeometry geometry = MakePresetGeometry(options.preset);
+  const PresetGeometry geometry = MakePresetGeometry(options.preset, options.views);
   const AnalyticScene scene =
       AnalyticScene::MakeCourtyard(geometry.texture_min_wavelength_m, kTextureSeed);
   const int supersampling =
@@ -387,7 +435,7 @@ SyntheticScene GenerateScene(const SynthOptions& options, const ProgressCallback
   Timer timer;
   for (int v = 0; v < num_views; ++v) {
     // The key of a view is its fountain number, so a view renders identically in every preset
-    // that contains it at the same size.
+    // that contains it at the same size (with synth.views a number may name another station).
     const int view_key = std::stoi(geometry.view_names[v]);
     ViewRender r = RenderView(scene, geometry.cameras[v], options, supersampling, view_key,
                               geometry.scanner_center_world);

@@ -13,14 +13,28 @@
 
 namespace gcpstereo::synth {
 
+// The range of SynthOptions::views other than 0.
+constexpr int kMinSynthViews = 3;
+constexpr int kMaxSynthViews = 99;
+
 // Options of the synthetic data set generator (`gcpstereo synth`). The geometry (scene, cameras,
-// scanner position) is fixed by the preset; `seed` drives the sensor noise, the per-view exposure
-// and the laser noise. YAML keys are "synth.<field>".
+// scanner position) is fixed by the preset and `views`; `seed` drives the sensor noise, the
+// per-view exposure and the laser noise. YAML keys are "synth.<field>".
 struct SynthOptions {
   // Preset: "tiny" (5 views, 160×107), "small" (7 views, 640×427), "fountain" (11 views,
   // 1536×1024 placed like Strecha's fountain-P11). Views keep their fountain numbers, so the
   // reference is view "0005" in every preset.
   std::string preset = "small";
+  // Number of views. 0 = the preset's own cameras (above). N in [kMinSynthViews, kMaxSynthViews]:
+  // N cameras at evenly spaced angles over the preset's arc (from its first to its last
+  // station's angle about the look-at point; not widened, so more views stand closer together),
+  // at the distance and height of the preset's stations interpolated linearly in that angle, with
+  // the preset's image size. Names are consecutive 4-digit numbers in arc order, left to right,
+  // and "0005" is the reference (the laser's too): the station nearest head-on (0°) if at most
+  // five stations lie left of it, else the sixth from the left (names 0000 … N−1). On the
+  // fountain's arc (−52° … +53.5°) "0005" is the head-on station up to 11 views; with 31 it
+  // stands at −34°.
+  int views = 0;
   // Seed of every random draw (per-pixel and per-point generators are derived from it). Any value.
   std::uint64_t seed = 1;
   // Standard deviation of the additive Gaussian sensor noise, grey levels (0…255 scale), per
@@ -54,7 +68,7 @@ struct SynthOptions {
   void Check() const;
 };
 
-// The fixed geometry of a preset.
+// The fixed geometry of a preset (with SynthOptions::views its cameras only change).
 struct PresetGeometry {
   std::string preset;
   std::vector<std::string> view_names;                      // "0003" … : fountain-P11 numbering
@@ -69,7 +83,9 @@ struct PresetGeometry {
 };
 
 // The cameras and constants of "tiny", "small" or "fountain"; throws ConfigError otherwise.
-PresetGeometry MakePresetGeometry(const std::string& preset);
+// `num_views`: 0 = the preset's own cameras, else that many over the preset's arc (see
+// SynthOptions::views; ConfigError naming synth.views outside [kMinSynthViews, kMaxSynthViews]).
+PresetGeometry MakePresetGeometry(const std::string& preset, int num_views = 0);
 
 // The laser's standard deviation at range `range_m`: a + b · range (see SynthOptions).
 double LaserSigma(const SynthOptions& options, double range_m);
