@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -139,17 +140,20 @@ PointCloud AsymmetricScene() {
   return cloud;
 }
 
-// The model: every 25th scan point in the frame of TestSimilarity()⁻¹ with 2 mm of noise (a
-// reconstruction's own frame and scale).
-std::vector<Eigen::Vector3d> ModelOf(const PointCloud& scan, const Similarity& world_from_model) {
-  std::mt19937 random(3);
+// The model: every 25th scan point (of those within max_abs_x of x = 0) in the frame of
+// world_from_model⁻¹ with 2 mm of noise (a reconstruction's own frame and scale).
+std::vector<Eigen::Vector3d> ModelOf(const PointCloud& scan, const Similarity& world_from_model,
+                                     unsigned seed = 3,
+                                     double max_abs_x = std::numeric_limits<double>::infinity()) {
+  std::mt19937 random(seed);
   std::normal_distribution<double> noise(0.0, 0.002);
   const Similarity model_from_world = world_from_model.Inverse();
   std::vector<Eigen::Vector3d> model;
   for (size_t i = 0; i < scan.size(); i += 25) {
-    const Eigen::Vector3d x = scan.points[i].cast<double>() +
-                              Eigen::Vector3d(noise(random), noise(random), noise(random));
-    model.push_back(model_from_world.Apply(x));
+    const Eigen::Vector3d x = scan.points[i].cast<double>();
+    if (std::abs(x.x()) > max_abs_x) continue;
+    model.push_back(
+        model_from_world.Apply(x + Eigen::Vector3d(noise(random), noise(random), noise(random))));
   }
   return model;
 }
@@ -221,18 +225,9 @@ PointCloud Valley() {
   return cloud;
 }
 
+// The valley's model: its points within 4 m of the middle (the scan runs on beyond them).
 std::vector<Eigen::Vector3d> ValleyModel(const PointCloud& valley, const Similarity& truth) {
-  std::mt19937 random(5);
-  std::normal_distribution<double> noise(0.0, 0.002);
-  const Similarity model_from_world = truth.Inverse();
-  std::vector<Eigen::Vector3d> model;
-  for (size_t i = 0; i < valley.size(); i += 25) {
-    const Eigen::Vector3d x = valley.points[i].cast<double>();
-    if (std::abs(x.x()) > 4.0) continue;
-    model.push_back(
-        model_from_world.Apply(x + Eigen::Vector3d(noise(random), noise(random), noise(random))));
-  }
-  return model;
+  return ModelOf(valley, truth, 5, 4.0);
 }
 
 std::vector<Eigen::Vector3d> ValleyCentres(const Similarity& truth) {

@@ -12,6 +12,7 @@
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/synth/generator.h"
+#include "laser_coverage.h"
 
 namespace gcpstereo::synth {
 namespace {
@@ -335,19 +336,9 @@ TEST(SynthGeneratorTest, ViewsOptionGeneratesNViews) {
   }
   // The scan covers the reference view as it does the preset's (laser_test.cpp): a laser point
   // in more than 90 % of its 8×8 pixel blocks.
-  const Camera& ref = s.views[s.reference_index].camera;
-  const int bw = (ref.width + 7) / 8, bh = (ref.height + 7) / 8;
-  std::vector<int> hits(bw * bh, 0);
-  for (const auto& p : s.laser.points) {
-    Eigen::Vector2d px;
-    double depth;
-    if (!ref.Project(p.cast<double>(), &px, &depth) || !ref.InImage(px)) continue;
-    const int c = std::lround(px.x()), r = std::lround(px.y());
-    ++hits[(r / 8) * bw + c / 8];
-  }
-  int covered = 0;
-  for (int h : hits) covered += h > 0;
-  EXPECT_GT(covered, 0.9 * bw * bh) << covered << " of " << bw * bh << " blocks";
+  const BlockCoverage coverage = LaserCoverageOfReference(s);
+  EXPECT_GT(coverage.covered, 0.9 * coverage.total)
+      << coverage.covered << " of " << coverage.total << " blocks";
   options.views = 0;
   EXPECT_EQ(GenerateScene(options).views.size(), 5u);
 }

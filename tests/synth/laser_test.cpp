@@ -8,6 +8,7 @@
 
 #include "gcpstereo/synth/generator.h"
 #include "gcpstereo/synth/scene.h"
+#include "laser_coverage.h"
 
 namespace gcpstereo::synth {
 namespace {
@@ -90,20 +91,9 @@ TEST(SynthLaserTest, ScanCoversTheReferenceView) {
   SynthOptions options;
   options.preset = "tiny";
   const SyntheticScene s = GenerateScene(options);
-  const Camera& ref = s.views[s.reference_index].camera;
-  // Count 8×8 pixel blocks of the reference view that receive at least one laser point.
-  const int bw = (ref.width + 7) / 8, bh = (ref.height + 7) / 8;
-  std::vector<int> hits(bw * bh, 0);
-  for (const auto& p : s.laser.points) {
-    Eigen::Vector2d px;
-    double depth;
-    if (!ref.Project(p.cast<double>(), &px, &depth) || !ref.InImage(px)) continue;
-    const int c = std::lround(px.x()), r = std::lround(px.y());
-    ++hits[(r / 8) * bw + c / 8];
-  }
-  int covered = 0;
-  for (int h : hits) covered += h > 0;
-  EXPECT_GT(covered, 0.9 * bw * bh) << covered << " of " << bw * bh << " blocks";
+  const BlockCoverage coverage = LaserCoverageOfReference(s);
+  EXPECT_GT(coverage.covered, 0.9 * coverage.total)
+      << coverage.covered << " of " << coverage.total << " blocks";
 }
 
 }  // namespace
