@@ -151,10 +151,7 @@ int main(int argc, char** argv) {
             } catch (const std::exception&) {
               views = -1;
             }
-            if (views == 0 || (views >= gcpstereo::synth::kMinSynthViews &&
-                               views <= gcpstereo::synth::kMaxSynthViews)) {
-              return std::string();
-            }
+            if (gcpstereo::synth::IsValidSynthViews(views)) return std::string();
             return "0 (the preset's cameras) or " +
                    std::to_string(gcpstereo::synth::kMinSynthViews) + ".." +
                    std::to_string(gcpstereo::synth::kMaxSynthViews) + ", got " + text;

@@ -228,9 +228,13 @@ LaserResult SimulateLaser(const AnalyticScene& scene, const Camera& reference,
   return result;
 }
 
-std::string ViewsConstraint() {
-  return "views == 0 (the preset's cameras) or " + std::to_string(kMinSynthViews) +
-         " <= views <= " + std::to_string(kMaxSynthViews);
+// Throws ConfigError naming synth.views unless IsValidSynthViews(views).
+void CheckViews(int views) {
+  if (IsValidSynthViews(views)) return;
+  throw ConfigError(ViolatedConstraint("synth.views", std::to_string(views),
+                                       "views == 0 (the preset's cameras) or " +
+                                           std::to_string(kMinSynthViews) +
+                                           " <= views <= " + std::to_string(kMaxSynthViews)));
 }
 
 }  // namespace
@@ -254,9 +258,7 @@ void SynthOptions::Check() const {
     fail("synth.exposure_offset_variation", FormatNumber(exposure_offset_variation),
          "0 <= exposure_offset_variation <= 20");
   }
-  if (views != 0 && (views < kMinSynthViews || views > kMaxSynthViews)) {
-    fail("synth.views", std::to_string(views), ViewsConstraint());
-  }
+  CheckViews(views);
   if (supersampling < 0 || supersampling > 8) {
     fail("synth.supersampling", std::to_string(supersampling), "0 <= supersampling <= 8");
   }
@@ -311,10 +313,7 @@ PresetGeometry MakePresetGeometry(const std::string& preset, int num_views) {
     throw ConfigError(
         ViolatedConstraint("synth.preset", "'" + preset + "'", "one of tiny, small, fountain"));
   }
-  if (num_views != 0 && (num_views < kMinSynthViews || num_views > kMaxSynthViews)) {
-    throw ConfigError(
-        ViolatedConstraint("synth.views", std::to_string(num_views), ViewsConstraint()));
-  }
+  CheckViews(num_views);
   const double scale = width / 1536.0;
   const double f_full = 1381.0, fy_full = 1383.5, cx_full = 759.6, cy_full = 503.2;
   // Angles (degrees, about the look-at point, 0 = straight in front of the wall, positive to the

@@ -16,6 +16,10 @@ namespace gcpstereo::synth {
 // The range of SynthOptions::views other than 0.
 constexpr int kMinSynthViews = 3;
 constexpr int kMaxSynthViews = 99;
+// 0 (the preset's cameras) or a count in [kMinSynthViews, kMaxSynthViews].
+constexpr bool IsValidSynthViews(int views) {
+  return views == 0 || (views >= kMinSynthViews && views <= kMaxSynthViews);
+}
 
 // Options of the synthetic data set generator (`gcpstereo synth`). The geometry (scene, cameras,
 // scanner position) is fixed by the preset and `views`; `seed` drives the sensor noise, the
