@@ -251,7 +251,9 @@ json TilesJson(const optimize::TiledResult& optimized) {
            {"mean_abs_offset", tile.refinement.mean_abs_offset},
            {"iterations", tile.refinement.iterations},
            {"converged", tile.refinement.solver_converged},
-           {"seconds", tile.refinement.time_seconds}}}});
+           {"seconds", tile.refinement.time_seconds},
+           {"build_seconds", tile.refinement.build_seconds},
+           {"solve_seconds", tile.refinement.solve_seconds}}}});
   }
   return tiles;
 }

@@ -555,6 +555,9 @@ void BM_Refinement(benchmark::State& state) {
   state.counters["solver_converged"] = summary.solver_converged;
   state.counters["mean_abs_err"] = cv::mean(cv::abs(refined - truth))[0];
   state.counters["iterations"] = summary.iterations;
+  state.counters["build_s"] = summary.build_seconds;
+  state.counters["solve_s"] = summary.solve_seconds;
+  state.counters["final_cost"] = summary.final_cost;
   state.counters["peak_MiB"] = PeakResidentMemoryBytes() / (1024.0 * 1024.0);
 }
 BENCHMARK(BM_Refinement)

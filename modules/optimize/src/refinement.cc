@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <memory>
 #include <sstream>
+#include <unordered_map>
 #include <vector>
 
 #include <ceres/ceres.h>
@@ -46,37 +48,53 @@ class Difference final : public ceres::SizedCostFunction<1, 1, 1> {
 };
 
 // r = sign(d)·√(2 λr Ψ̃(d)), d = x − D̂, so that ½r² = λr Ψ̃(d) and r is smooth at d = 0.
-class GcpResidual final : public ceres::SizedCostFunction<1, 1> {
- public:
-  GcpResidual(double prior, const EnergyOptions& options)
-      : prior_(prior), lambda_r_(options.lambda_r), gamma_d_(options.gamma_d), eta_(options.eta) {}
-  bool Evaluate(double const* const* x, double* residual, double** jacobians) const override {
-    const double d = x[0][0] - prior_;
+struct GcpTerm {
+  double prior, lambda_r, gamma_d, eta;
+  // Residual and (when jacobian != nullptr) its derivative at x.
+  void Evaluate(double x, double* residual, double* jacobian) const {
+    const double d = x - prior;
     const double root = std::sqrt(d * d + kPriorSmoothing * kPriorSmoothing);
     const double u = root - kPriorSmoothing;
-    const double e = (1.0 - eta_) * std::exp(-u / gamma_d_);
-    const double psi = -std::log(e + eta_);
+    const double e = (1.0 - eta) * std::exp(-u / gamma_d);
+    const double psi = -std::log(e + eta);
     if (std::abs(d) < 1e-9) {
-      const double slope = std::sqrt(lambda_r_ * (1.0 - eta_) / (gamma_d_ * kPriorSmoothing));
-      residual[0] = slope * d;
-      if (jacobians && jacobians[0]) jacobians[0][0] = slope;
-      return true;
+      const double slope = std::sqrt(lambda_r * (1.0 - eta) / (gamma_d * kPriorSmoothing));
+      *residual = slope * d;
+      if (jacobian) *jacobian = slope;
+      return;
     }
-    const double r = std::copysign(std::sqrt(2.0 * lambda_r_ * std::max(psi, 0.0)), d);
-    residual[0] = r;
-    if (jacobians && jacobians[0]) {
-      const double dpsi_du = e / (gamma_d_ * (e + eta_));
+    const double r = std::copysign(std::sqrt(2.0 * lambda_r * std::max(psi, 0.0)), d);
+    *residual = r;
+    if (jacobian) {
+      const double dpsi_du = e / (gamma_d * (e + eta));
       const double du_dd = d / root;
-      jacobians[0][0] = r != 0.0 ? lambda_r_ * dpsi_du * du_dd / r : 0.0;
+      *jacobian = r != 0.0 ? lambda_r * dpsi_du * du_dd / r : 0.0;
     }
+  }
+};
+
+// A pixel with a prior: the QuadraticData residual and the GcpTerm residual in one block (one
+// residual block fewer per prior pixel for Ceres to carry; the objective is the same sum).
+class QuadraticDataAndGcp final : public ceres::SizedCostFunction<2, 1> {
+ public:
+  QuadraticDataAndGcp(double sqrt_curvature, double minimum, double prior,
+                      const EnergyOptions& options)
+      : sqrt_curvature_(sqrt_curvature),
+        minimum_(minimum),
+        gcp_{prior, options.lambda_r, options.gamma_d, options.eta} {}
+  bool Evaluate(double const* const* x, double* residual, double** jacobians) const override {
+    double* jacobian = jacobians ? jacobians[0] : nullptr;
+    residual[0] = sqrt_curvature_ * (x[0][0] - minimum_);
+    if (jacobian) jacobian[0] = sqrt_curvature_;
+    gcp_.Evaluate(x[0][0], &residual[1], jacobian ? &jacobian[1] : nullptr);
     return true;
   }
 
  private:
-  double prior_, lambda_r_, gamma_d_, eta_;
+  double sqrt_curvature_, minimum_;
+  GcpTerm gcp_;
 };
 
-// Parabola offset in [−0.5, 0.5] and its curvature; false when not convex / at the label range end.
 bool ParabolaFit(const CostVolume& costs, int row, int col, int label, double* offset,
                  double* curvature, double* slope) {
   if (label <= 0 || label + 1 >= costs.num_labels()) return false;
@@ -168,19 +186,23 @@ cv::Mat RefineSubLabel(const MrfProblem& problem, const cv::Mat& labels,
   }
 
   if (options.method == RefinementMethod::kCeres) {
-    // Cost functions outlive the problem (declared first); the shared Difference is added many
-    // times, so the problem must not own them.
-    std::vector<std::unique_ptr<ceres::CostFunction>> owned;
-    owned.reserve(static_cast<std::size_t>(w) * h * 2 + 1);
+    // Cost functions outlive the problem (declared first), in deques (one allocation per chunk,
+    // stable addresses); the shared Difference is added many times, so the problem must not own
+    // them.
+    std::deque<QuadraticData> data_terms;
+    std::deque<QuadraticDataAndGcp> data_gcp_terms;
+    Difference difference;
+    std::unordered_map<double, std::unique_ptr<ceres::LossFunction>> pair_losses;
     ceres::Problem::Options problem_options;
     problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+    // Losses are shared too: w_pq takes few distinct values (max(exp(−c/γc), ε) with c the
+    // distance of two 8-bit colours is the floor ε for all but the closest colours), so one
+    // ScaledLoss per distinct weight instead of two allocations per pair.
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     // Every block below is built from the labelling's own pixels (valid pointers, one parameter
     // each, no duplicate): Ceres's per-call checks of that cost time for a million blocks.
     problem_options.disable_all_safety_checks = true;
     ceres::Problem ceres_problem(problem_options);
-    Difference* difference = new Difference;
-    owned.emplace_back(difference);
     const bool use_prior =
         energy_options.use_gcp_energy && !problem.prior.empty() && energy_options.lambda_r > 0.0;
     for (int row = 0; row < h; ++row) {
@@ -197,19 +219,18 @@ cv::Mat RefineSubLabel(const MrfProblem& problem, const cv::Mat& labels,
         } else {
           curvature = options.min_data_curvature;
         }
-        auto* data = new QuadraticData(std::sqrt(energy_options.data_weight * curvature), minimum);
-        owned.emplace_back(data);
-        ceres_problem.AddResidualBlock(data, nullptr, xp);
+        const double sqrt_curvature = std::sqrt(energy_options.data_weight * curvature);
+        const float prior = use_prior ? problem.prior.ptr<float>(row)[col] : NAN;
+        if (std::isfinite(prior)) {
+          ceres_problem.AddResidualBlock(
+              &data_gcp_terms.emplace_back(sqrt_curvature, minimum, prior, energy_options), nullptr,
+              xp);
+        } else {
+          ceres_problem.AddResidualBlock(&data_terms.emplace_back(sqrt_curvature, minimum), nullptr,
+                                         xp);
+        }
         ceres_problem.SetParameterLowerBound(xp, 0, std::max(0, l - 1));
         ceres_problem.SetParameterUpperBound(xp, 0, std::min(num_labels - 1, l + 1));
-        if (use_prior) {
-          const float prior = problem.prior.ptr<float>(row)[col];
-          if (std::isfinite(prior)) {
-            auto* gcp = new GcpResidual(prior, energy_options);
-            owned.emplace_back(gcp);
-            ceres_problem.AddResidualBlock(gcp, nullptr, xp);
-          }
-        }
         auto add_pair = [&](int q, const cv::Vec3b& cq) {
           const int lq = labels.ptr<int>(q / w)[q % w];
           if (std::abs(l - lq) >= energy_options.truncation) return;
@@ -219,9 +240,12 @@ cv::Mat RefineSubLabel(const MrfProblem& problem, const cv::Mat& labels,
           if (weight <= 0.0) return;
           // ½·scale·huber(r²) ≈ weight·|r| for |r| >> δ: scale = weight / δ.
           const double delta = options.smoothness_huber;
-          auto* loss = new ceres::ScaledLoss(new ceres::HuberLoss(delta), weight / delta,
-                                             ceres::TAKE_OWNERSHIP);
-          ceres_problem.AddResidualBlock(difference, loss, xp, &x[q]);
+          std::unique_ptr<ceres::LossFunction>& loss = pair_losses[weight];
+          if (!loss) {
+            loss = std::make_unique<ceres::ScaledLoss>(new ceres::HuberLoss(delta), weight / delta,
+                                                       ceres::TAKE_OWNERSHIP);
+          }
+          ceres_problem.AddResidualBlock(&difference, loss.get(), xp, &x[q]);
         };
         if (col + 1 < w) add_pair(p + 1, problem.image.ptr<cv::Vec3b>(row)[col + 1]);
         if (row + 1 < h) add_pair(p + w, problem.image.ptr<cv::Vec3b>(row + 1)[col]);
@@ -245,7 +269,9 @@ cv::Mat RefineSubLabel(const MrfProblem& problem, const cv::Mat& labels,
     solver_options.logging_type = ceres::SILENT;
     solver_options.minimizer_progress_to_stdout = false;
     ceres::Solver::Summary ceres_summary;
+    s.build_seconds = timer.ElapsedSeconds();
     ceres::Solve(solver_options, &ceres_problem, &ceres_summary);
+    s.solve_seconds = timer.ElapsedSeconds() - s.build_seconds;
     s.initial_cost = ceres_summary.initial_cost;
     s.final_cost = ceres_summary.final_cost;
     s.iterations = static_cast<int>(ceres_summary.iterations.size());

@@ -52,6 +52,8 @@ struct RefinementSummary {
   bool solver_converged = true;  // Ceres reported CONVERGENCE
   std::string solver_message;
   double time_seconds = 0.0;
+  double build_seconds = 0.0;  // Ceres: building the problem (residual blocks, bounds)
+  double solve_seconds = 0.0;  // Ceres: ceres::Solve
 };
 
 // Continuous labels (CV_32F) from a discrete labelling (CV_32S) of `problem`.
