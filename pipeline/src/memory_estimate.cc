@@ -58,8 +58,17 @@ constexpr double kTileBytesPerPixel = 176.0 + 68.0 + 11.0;
 // (640×427, 48 labels, one tile, one thread) peaked at 810 MB with it, 236 MB with the parabola,
 // which needs nothing more, when Ceres factorised the normal equations (sparse Cholesky); with
 // conjugate gradients, synthetic_fountain.yaml on the small preset (360 labels, one tile, one
-// thread) peaks at 808 MB instead of 907 MB, about 1640 bytes per pixel for Ceres.
-constexpr double kCeresBytesPerPixel = 2000.0;
+// thread) peaks at 808 MB instead of 907 MB, about 1640 bytes per pixel for Ceres. With the losses
+// shared and the cost functions in deques (one residual block per pixel with a prior), KITTI frame
+// 10 (kitti_lidar.yaml, two tiles at once) peaks at 870-890 MB instead of 1081-1110 MB: about
+// 1300 bytes per pixel beside the cost volume.
+constexpr double kCeresBytesPerPixel = 1400.0;
+// Per pixel of a tile, the IRLS refinement (optimizer.refinement: irls): the problem's arrays (5
+// doubles and two pair records), the 5-point matrix (values, column indices and the positions of
+// its entries), the right-hand side, two solution vectors and conjugate gradients' four vectors
+// and diagonal, plus the triplets and Eigen's transposed copy while the matrix is built: about
+// 400 bytes, below the expansion's phase for any label count.
+constexpr double kIrlsBytesPerPixel = 400.0;
 
 constexpr double kWindowFilterBytesPerPixel = 300.0;
 
@@ -136,8 +145,9 @@ MemoryEstimate EstimateViewMemory(const ViewMemoryInput& in) {
     // the guided filter's per-pixel double images (the guide, its means and inverse covariances,
     // and each thread's cost, mean, result and coefficient rows: about 300 bytes).
     if (in.window_filter) expansion += 2.0 * labels + kWindowFilterBytesPerPixel;
-    const double refinement =
-        in.refinement == "ceres" ? 2.0 * labels + kCeresBytesPerPixel + 11.0 : 0.0;
+    const double refinement = in.refinement == "ceres"  ? 2.0 * labels + kCeresBytesPerPixel + 11.0
+                              : in.refinement == "irls" ? 2.0 * labels + kIrlsBytesPerPixel + 11.0
+                                                        : 0.0;
     e.optimization_bytes = e.concurrent_tiles * e.tile_pixels * std::max(expansion, refinement);
   }
   return e;

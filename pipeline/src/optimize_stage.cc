@@ -252,6 +252,9 @@ json TilesJson(const optimize::TiledResult& optimized) {
            {"iterations", tile.refinement.iterations},
            {"converged", tile.refinement.solver_converged},
            {"seconds", tile.refinement.time_seconds},
+           {"initial_cost", tile.refinement.initial_cost},
+           {"final_cost", tile.refinement.final_cost},
+           {"linear_iterations", tile.refinement.linear_iterations},
            {"build_seconds", tile.refinement.build_seconds},
            {"solve_seconds", tile.refinement.solve_seconds}}}});
   }

@@ -455,15 +455,19 @@ void PipelineConfig::Register(config::Schema* s) {
          {"initial labelling: winner-take-all, or the propagated D̂ where it exists"});
   s->Add("optimizer.blend", &optimizer.blend, {"mean", "feather"},
          {"merging of the tile overlaps: mean (paper) or linear feathering"});
-  s->Add("optimizer.refinement", &optimizer.refinement_method, {"none", "parabola", "ceres"},
-         {"sub-label refinement after graph cuts"});
+  s->Add("optimizer.refinement", &optimizer.refinement_method,
+         {"none", "parabola", "ceres", "irls"},
+         {"sub-label refinement after graph cuts: none, parabola (data only), or the joint "
+          "continuous problem solved by irls (iteratively reweighted least squares) or ceres "
+          "(Levenberg-Marquardt; same objective, slower)"});
   s->Add("optimizer.refinement_iterations", &optimizer.refinement.max_iterations, Range::AtLeast(1),
-         {"Ceres refinement: maximum iterations"});
+         {"irls/ceres refinement: maximum iterations"});
   s->Add("optimizer.refinement_huber", &optimizer.refinement.smoothness_huber,
          Range::GreaterThan(0.0),
-         {"Ceres refinement: Huber width of the smoothness term", "label steps"});
+         {"irls/ceres refinement: Huber width of the smoothness term", "label steps"});
   s->Add("optimizer.refinement_min_curvature", &optimizer.refinement.min_data_curvature,
-         Range::GreaterThan(0.0), {"Ceres refinement: smallest curvature of the local data model"});
+         Range::GreaterThan(0.0),
+         {"irls/ceres refinement: smallest curvature of the local data model"});
 
   s->Add("optimizer.tiles", &tiling.tiles, 2, Range::Between(1, 64),
          {"[rows, cols] of tiles for graph cuts (paper: [2, 2])"});

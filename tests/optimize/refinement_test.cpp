@@ -2,6 +2,7 @@
 #include "gcpstereo/optimize/refinement.h"
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -93,6 +94,53 @@ TEST(RefineSubLabel, PriorPullsTowardsTheGcps) {
   EXPECT_LT(MeanAbsError(refined, plane.truth), MeanAbsError(discrete.labels, plane.truth));
 }
 
+// IRLS minimises the objective Ceres minimises: from the same start it must end at Ceres's cost
+// or below (up to the tolerance both stop at), inside the same box, with and without a prior
+// (the prior makes the problem non-convex: Ψ̃ flattens away from D̂).
+TEST(RefineSubLabel, IrlsReachesTheCeresObjective) {
+  for (const bool with_prior : {false, true}) {
+    Plane plane = MakePlane(40, 32, 12, 4.0f, 11);
+    if (with_prior) {
+      // A prior on every third pixel, some of it wrong by two labels (outliers Ψ̃ must discount).
+      plane.problem.prior = cv::Mat(32, 40, CV_32F, cv::Scalar(std::nanf("")));
+      for (int y = 0; y < 32; ++y) {
+        for (int x = (y % 3); x < 40; x += 3) {
+          plane.problem.prior.at<float>(y, x) =
+              plane.truth.at<float>(y, x) + ((x + y) % 7 == 0 ? 2.0f : 0.0f);
+        }
+      }
+    }
+    const MrfProblem problem = plane.problem.View();
+    EnergyOptions energy;
+    energy.use_gcp_energy = with_prior;
+    const ExpansionResult discrete = AlphaExpansion(problem, energy, ExpansionOptions());
+    RefinementOptions ceres_options;
+    ceres_options.method = RefinementMethod::kCeres;
+    RefinementOptions irls_options;
+    irls_options.method = RefinementMethod::kIrls;
+    RefinementSummary ceres_summary, irls_summary;
+    const cv::Mat ceres =
+        RefineSubLabel(problem, discrete.labels, energy, ceres_options, &ceres_summary);
+    const cv::Mat irls =
+        RefineSubLabel(problem, discrete.labels, energy, irls_options, &irls_summary);
+    std::printf("prior %d: ceres %.6f -> %.6f (%d it), irls %.6f -> %.6f (%s)\n", with_prior,
+                ceres_summary.initial_cost, ceres_summary.final_cost, ceres_summary.iterations,
+                irls_summary.initial_cost, irls_summary.final_cost,
+                irls_summary.solver_message.c_str());
+    EXPECT_NEAR(irls_summary.initial_cost, ceres_summary.initial_cost,
+                1e-9 * ceres_summary.initial_cost);
+    EXPECT_LT(irls_summary.final_cost, irls_summary.initial_cost);
+    EXPECT_LE(irls_summary.final_cost, ceres_summary.final_cost * (1.0 + 1e-5));
+    EXPECT_TRUE(irls_summary.solver_converged);
+    EXPECT_GT(irls_summary.linear_iterations, 0);
+    cv::Mat discrete_float;
+    discrete.labels.convertTo(discrete_float, CV_32F);
+    EXPECT_LE(cv::norm(irls, discrete_float, cv::NORM_INF), 1.0 + 1e-6);
+    EXPECT_LT(cv::norm(irls, ceres, cv::NORM_INF), 0.05);
+    EXPECT_LT(MeanAbsError(irls, plane.truth), MeanAbsError(discrete.labels, plane.truth));
+  }
+}
+
 TEST(RefineSubLabel, NoneKeepsTheLabelsAndOptionsAreChecked) {
   const Plane plane = MakePlane(10, 8, 12, 2.0f, 3);
   const cv::Mat labels(8, 10, CV_32S, cv::Scalar(4));
@@ -108,6 +156,8 @@ TEST(RefineSubLabel, NoneKeepsTheLabelsAndOptionsAreChecked) {
     EXPECT_STREQ(e.what(), "optimizer.refinement_iterations = 0. Violated constraint: >= 1");
   }
   EXPECT_THROW(ParseRefinementMethod("cubic"), ConfigError);
+  EXPECT_EQ(ParseRefinementMethod("irls"), RefinementMethod::kIrls);
+  EXPECT_STREQ(RefinementMethodName(RefinementMethod::kIrls), "irls");
 }
 
 }  // namespace

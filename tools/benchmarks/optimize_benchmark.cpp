@@ -558,6 +558,7 @@ void BM_Refinement(benchmark::State& state) {
   state.counters["build_s"] = summary.build_seconds;
   state.counters["solve_s"] = summary.solve_seconds;
   state.counters["final_cost"] = summary.final_cost;
+  state.counters["cg_iterations"] = static_cast<double>(summary.linear_iterations);
   state.counters["peak_MiB"] = PeakResidentMemoryBytes() / (1024.0 * 1024.0);
 }
 BENCHMARK(BM_Refinement)
@@ -566,6 +567,7 @@ BENCHMARK(BM_Refinement)
     ->Args({static_cast<int>(RefinementMethod::kCeres), 50})  // the default
     ->Args({static_cast<int>(RefinementMethod::kCeres), 10})
     ->Args({static_cast<int>(RefinementMethod::kCeres), 3})
+    ->Args({static_cast<int>(RefinementMethod::kIrls), 50})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 

@@ -22,7 +22,7 @@ struct ViewMemoryInput {
   int threads = 1;  // tiles solved at once (runtime.threads; 0 = all cores)
   std::string propagation = "linear_system";  // propagation.method
   std::string solver = "cholmod";             // propagation.solver
-  std::string refinement = "ceres";           // optimizer.refinement
+  std::string refinement = "irls";            // optimizer.refinement
   bool window_filter = false;  // the cost's window aggregation (cost.window_px or sweep_ > 1)
   // The process's resident memory when the estimate is made (images, GCPs, libraries): replaces
   // the base and views terms when > 0 (a run knows it; a plan before the run does not).

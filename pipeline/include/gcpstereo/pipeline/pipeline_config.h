@@ -116,10 +116,10 @@ struct OptimizerOptions {
   optimize::EnergyOptions energy;
   optimize::ExpansionOptions expansion;
   optimize::RefinementOptions refinement;
-  std::string candidate_labels = "local";   // all | local
-  std::string initialization = "wta";       // wta | prior
-  std::string refinement_method = "ceres";  // none | parabola | ceres
-  std::string blend = "mean";               // mean | feather
+  std::string candidate_labels = "local";  // all | local
+  std::string initialization = "wta";      // wta | prior
+  std::string refinement_method = "irls";  // none | parabola | ceres | irls
+  std::string blend = "mean";              // mean | feather
   // optimizer.prior_radius_px: E_gcp only where a GCP lies within this distance (pixels of the
   // processing resolution); elsewhere D̂ is an extrapolation over textureless areas and the data
   // and smoothness terms decide. 0 = everywhere (the paper). Range >= 0.
