@@ -564,10 +564,10 @@ void BM_Refinement(benchmark::State& state) {
 BENCHMARK(BM_Refinement)
     ->Args({static_cast<int>(RefinementMethod::kNone), 50})
     ->Args({static_cast<int>(RefinementMethod::kParabola), 50})
-    ->Args({static_cast<int>(RefinementMethod::kCeres), 50})  // the default
+    ->Args({static_cast<int>(RefinementMethod::kCeres), 50})
     ->Args({static_cast<int>(RefinementMethod::kCeres), 10})
     ->Args({static_cast<int>(RefinementMethod::kCeres), 3})
-    ->Args({static_cast<int>(RefinementMethod::kIrls), 50})
+    ->Args({static_cast<int>(RefinementMethod::kIrls), 50})  // the default
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 
@@ -596,6 +596,7 @@ BENCHMARK(BM_Fountain)
     ->Args({1, static_cast<int>(RefinementMethod::kNone)})
     ->Args({2, static_cast<int>(RefinementMethod::kNone)})
     ->Args({2, static_cast<int>(RefinementMethod::kCeres)})
+    ->Args({2, static_cast<int>(RefinementMethod::kIrls)})
     ->Unit(benchmark::kSecond)
     ->Iterations(1)
     ->UseRealTime();
