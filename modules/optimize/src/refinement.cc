@@ -50,10 +50,14 @@ class Difference final : public ceres::SizedCostFunction<1, 1, 1> {
   }
 };
 
-// r = sign(d)·√(2 λr Ψ̃(d)), d = x − D̂, so that ½r² = λr Ψ̃(d) and r is smooth at d = 0.
+// The GCP term λr·Ψ̃(d) of a pixel as a function of d = x − D̂, with Ψ̃ eq. (7) with |d| smoothed as
+// u = √(d² + κ²) − κ. As a residual r = sign(d)·√(2 λr Ψ̃(d)), so that ½r² = λr Ψ̃(d) and r is
+// smooth at d = 0.
 struct GcpTerm {
-  double prior, lambda_r, gamma_d, eta;
-  // λr·Ψ̃(d) (= ½r²).
+  double lambda_r, gamma_d, eta;
+  explicit GcpTerm(const EnergyOptions& options)
+      : lambda_r(options.lambda_r), gamma_d(options.gamma_d), eta(options.eta) {}
+  // λr·Ψ̃(d).
   double Penalty(double d) const {
     const double u = std::sqrt(d * d + kPriorSmoothing * kPriorSmoothing) - kPriorSmoothing;
     return lambda_r * std::max(-std::log((1.0 - eta) * std::exp(-u / gamma_d) + eta), 0.0);
@@ -65,26 +69,18 @@ struct GcpTerm {
     const double e = (1.0 - eta) * std::exp(-(root - kPriorSmoothing) / gamma_d);
     return lambda_r * e / (gamma_d * (e + eta)) / root;
   }
-  // Residual and (when jacobian != nullptr) its derivative at x.
-  void Evaluate(double x, double* residual, double* jacobian) const {
-    const double d = x - prior;
-    const double root = std::sqrt(d * d + kPriorSmoothing * kPriorSmoothing);
-    const double u = root - kPriorSmoothing;
-    const double e = (1.0 - eta) * std::exp(-u / gamma_d);
-    const double psi = -std::log(e + eta);
+  // The residual r at d and (when jacobian != nullptr) dr/dd = λr·Ψ̃'(d)/r.
+  void Evaluate(double d, double* residual, double* jacobian) const {
     if (std::abs(d) < 1e-9) {
       const double slope = std::sqrt(lambda_r * (1.0 - eta) / (gamma_d * kPriorSmoothing));
       *residual = slope * d;
       if (jacobian) *jacobian = slope;
       return;
     }
-    const double r = std::copysign(std::sqrt(2.0 * lambda_r * std::max(psi, 0.0)), d);
+    const double r = std::copysign(std::sqrt(2.0 * Penalty(d)), d);
     *residual = r;
-    if (jacobian) {
-      const double dpsi_du = e / (gamma_d * (e + eta));
-      const double du_dd = d / root;
-      *jacobian = r != 0.0 ? lambda_r * dpsi_du * du_dd / r : 0.0;
-    }
+    // λr·Ψ̃'(d) = ω·d with the majoriser's weight ω.
+    if (jacobian) *jacobian = r != 0.0 ? MajorizerWeight(d) * d / r : 0.0;
   }
 };
 
@@ -94,22 +90,21 @@ class QuadraticDataAndGcp final : public ceres::SizedCostFunction<2, 1> {
  public:
   QuadraticDataAndGcp(double sqrt_curvature, double minimum, double prior,
                       const EnergyOptions& options)
-      : sqrt_curvature_(sqrt_curvature),
-        minimum_(minimum),
-        gcp_{prior, options.lambda_r, options.gamma_d, options.eta} {}
+      : sqrt_curvature_(sqrt_curvature), minimum_(minimum), prior_(prior), gcp_(options) {}
   bool Evaluate(double const* const* x, double* residual, double** jacobians) const override {
     double* jacobian = jacobians ? jacobians[0] : nullptr;
     residual[0] = sqrt_curvature_ * (x[0][0] - minimum_);
     if (jacobian) jacobian[0] = sqrt_curvature_;
-    gcp_.Evaluate(x[0][0], &residual[1], jacobian ? &jacobian[1] : nullptr);
+    gcp_.Evaluate(x[0][0] - prior_, &residual[1], jacobian ? &jacobian[1] : nullptr);
     return true;
   }
 
  private:
-  double sqrt_curvature_, minimum_;
+  double sqrt_curvature_, minimum_, prior_;
   GcpTerm gcp_;
 };
 
+// Parabola offset in [−0.5, 0.5] and its curvature; false when not convex / at the label range end.
 bool ParabolaFit(const CostVolume& costs, int row, int col, int label, double* offset,
                  double* curvature, double* slope) {
   if (label <= 0 || label + 1 >= costs.num_labels()) return false;
@@ -124,7 +119,6 @@ bool ParabolaFit(const CostVolume& costs, int row, int col, int label, double* o
 
 // The continuous problem of kCeres/kIrls in plain arrays, one unknown per pixel (row-major).
 struct GridProblem {
-  int width = 0, height = 0;
   std::vector<double> sqrt_curvature;  // √(data_weight·a_p)
   std::vector<double> minimum;         // m_p
   std::vector<double> lower, upper;    // the box [l_p − 1, l_p + 1] ∩ [0, L − 1]
@@ -141,8 +135,6 @@ GridProblem MakeGridProblem(const MrfProblem& problem, const cv::Mat& labels,
   const int w = problem.width(), h = problem.height(), num_labels = problem.num_labels();
   const std::size_t n = static_cast<std::size_t>(w) * h;
   GridProblem g;
-  g.width = w;
-  g.height = h;
   g.sqrt_curvature.resize(n);
   g.minimum.resize(n);
   g.lower.resize(n);
@@ -264,7 +256,7 @@ void SolveWithCeres(const GridProblem& grid, const EnergyOptions& energy_options
 // The objective ½Σ‖residual‖² (with the pair losses) that Ceres reports as its cost.
 double GridObjective(const GridProblem& grid, const EnergyOptions& energy_options, double delta,
                      const std::vector<double>& x) {
-  const GcpTerm gcp{0.0, energy_options.lambda_r, energy_options.gamma_d, energy_options.eta};
+  const GcpTerm gcp(energy_options);
   double total = 0.0;
   for (std::size_t p = 0; p < x.size(); ++p) {
     const double r = grid.sqrt_curvature[p] * (x[p] - grid.minimum[p]);
@@ -284,7 +276,7 @@ void SolveWithIrls(const GridProblem& grid, const EnergyOptions& energy_options,
                    RefinementSummary* s) {
   const int n = static_cast<int>(x->size());
   const double delta = options.smoothness_huber;
-  const GcpTerm gcp{0.0, energy_options.lambda_r, energy_options.gamma_d, energy_options.eta};
+  const GcpTerm gcp(energy_options);
   // Fixed sparsity (diagonal + both halves of every pair), values refilled at each step.
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(static_cast<std::size_t>(n) + 2 * grid.pairs.size());
