@@ -120,7 +120,8 @@ std::string RunEvaluation(const EvalRequest& r) {
   }
   Dataset dataset;  // only its ground truth is used
   internal::EvaluationInputs inputs;
-  std::vector<eval::ReferencePoint> held_out;  // eval.lidar_holdout runs: the scored points
+  std::vector<eval::ReferencePoint> held_out;      // eval.lidar_holdout runs: the scored points
+  std::vector<eval::ReferencePoint> sfm_held_out;  // eval.sfm_holdout runs: the scored points
   json report;
 
   if (!r.run_folder.empty()) {
@@ -165,6 +166,12 @@ std::string RunEvaluation(const EvalRequest& r) {
       inputs.lidar_holdout = &held_out;
       inputs.holdout_in_disparity = dataset.rectified;
       inputs.holdout_not_visible = holdout.not_visible;
+    }
+    if (o.eval.sfm_holdout) {  // likewise a function of the model and the configuration
+      sfm_held_out =
+          internal::SplitSfmPointsForHoldout(o, dataset.reference.name, dataset.reference.camera)
+              .scored;
+      inputs.sfm_holdout = &sfm_held_out;
     }
     report["run"] = r.run_folder;
   } else if (!r.depth.empty()) {

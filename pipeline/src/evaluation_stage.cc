@@ -76,6 +76,16 @@ json Evaluate(const Dataset& dataset, const EvaluationInputs& inputs,
                                                      *inputs.lidar_holdout));
     }
   }
+  if (inputs.sfm_holdout && !inputs.sfm_holdout->empty()) {
+    json& out = metrics["sfm_holdout"];
+    out["unit"] = "relative depth";
+    out["split"] =
+        "checkerboard of eval.holdout_block_px blocks over the structure-from-motion points the "
+        "reference observes: one half may feed the sfm GCPs, the other half is scored";
+    for (const auto& [name, map] : inputs.depth_maps) {
+      out[name] = eval::EvaluateRelativeDepth(map, *inputs.sfm_holdout).ToJson();
+    }
+  }
   return metrics;
 }
 

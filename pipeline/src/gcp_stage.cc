@@ -158,6 +158,33 @@ std::vector<gcp::SfmPoint> SfmPointsOfReference(const PipelineConfig& config,
 
 }  // namespace
 
+SfmHoldout SplitSfmPointsForHoldout(const PipelineConfig& config, const std::string& reference_name,
+                                    const Camera& reference) {
+  std::vector<gcp::SfmPoint> points =
+      SfmPointsOfReference(config, reference_name, config.gcp.sfm.projected);
+  std::vector<Eigen::Vector2d> pixels;
+  std::vector<double> depths;
+  std::vector<int> kept;  // indices into `points` of the points in front and inside the image
+  for (size_t i = 0; i < points.size(); ++i) {
+    Eigen::Vector2d pixel;
+    double depth = 0.0;
+    if (!reference.Project(points[i].point_world, &pixel, &depth) || !reference.InImage(pixel)) {
+      continue;
+    }
+    kept.push_back(static_cast<int>(i));
+    pixels.push_back(pixel);
+    depths.push_back(depth);
+  }
+  const eval::LidarSplit split = eval::CheckerboardSplit(pixels, config.eval.holdout_block_px);
+  SfmHoldout holdout;
+  for (const int k : split.gcp_indices) holdout.gcp_part.push_back(std::move(points[kept[k]]));
+  for (const int k : split.score_indices) {
+    // Only what the reference itself observed is scored: a projected point may be hidden.
+    if (points[kept[k]].observed) holdout.scored.push_back({pixels[k], depths[k]});
+  }
+  return holdout;
+}
+
 RectifiedPair FindRectifiedPair(const Dataset& dataset, const std::string& purpose) {
   if (!dataset.rectified || dataset.neighbors.empty()) {
     throw ConfigError(purpose +
@@ -194,7 +221,15 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
     if (names[i] == "stereo") order.push_back(i);
   }
   LabelSpace provisional_labels;
-  json lidar_motion;  // gcp.lidar.motion: what was compensated, for report.json
+  json lidar_motion;
+  std::vector<gcp::SfmPoint> sfm_gcp_part;  // eval.sfm_holdout: the GCP squares' SfM points
+  if (config.eval.sfm_holdout) {
+    SfmHoldout holdout = SplitSfmPointsForHoldout(config, dataset.reference.name, reference);
+    result.sfm_holdout = std::move(holdout.scored);
+    sfm_gcp_part = std::move(holdout.gcp_part);
+    spdlog::info("SfM hold-out: {} points as sfm GCP candidates, {} points for scoring",
+                 sfm_gcp_part.size(), result.sfm_holdout.size());
+  }  // gcp.lidar.motion: what was compensated, for report.json
 
   for (const size_t index : order) {
     const std::string& source = names[index];
@@ -231,7 +266,9 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
                                             config.gcp.lidar, &summary);
     } else if (source == "sfm") {
       const std::vector<gcp::SfmPoint> points =
-          SfmPointsOfReference(config, dataset.reference.name, config.gcp.sfm.projected);
+          config.eval.sfm_holdout
+              ? sfm_gcp_part
+              : SfmPointsOfReference(config, dataset.reference.name, config.gcp.sfm.projected);
       sets[index] = gcp::GcpsFromSfmPoints(points, reference, config.dataset.scale, config.gcp.sfm,
                                            &summary, config.gcp.lidar);
       spdlog::info(

@@ -540,6 +540,10 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("eval.lidar_holdout", &eval.lidar_holdout,
          {"score against held-out LiDAR points: a checkerboard of blocks splits the projected "
           "scan into GCPs and scoring points"});
+  s->Add("eval.sfm_holdout", &eval.sfm_holdout,
+         {"score against held-out structure-from-motion points (colmap data sets): the same "
+          "checkerboard splits the points the reference observes into sfm GCP candidates and "
+          "scoring points (relative depth error above 1, 2 and 5 %, median)"});
   s->Add("eval.holdout_block_px", &eval.holdout_block_px, Range::Between(1, 256),
          {"block side of the held-out checkerboard", "px"});
 
@@ -673,6 +677,11 @@ void PipelineConfig::Check() const {
   if (eval.lidar_holdout &&
       std::find(gcp.sources.begin(), gcp.sources.end(), "lidar") == gcp.sources.end()) {
     throw ConfigError("eval.lidar_holdout needs lidar in gcp.sources");
+  }
+  if (eval.sfm_holdout && dataset.format != "colmap") {
+    throw ConfigError(ViolatedConstraint(
+        "eval.sfm_holdout", "true",
+        "false unless dataset.format is colmap (the scored points are the COLMAP model's)"));
   }
   std::vector<std::string> seen;
   for (const auto& source : gcp.sources) {

@@ -68,6 +68,17 @@ std::vector<std::pair<std::string, Table>> MetricsTables(const json& metrics) {
     tables.emplace_back(
         "Held-out LiDAR points (" + metrics["lidar_holdout"].value("unit", std::string()) + ")", t);
   }
+  if (metrics.contains("sfm_holdout")) {
+    Table t{{"map", "> 1 %", "> 2 %", "> 5 %", "median", "points (missing)"}};
+    for (const auto& [name, s] : metrics["sfm_holdout"].items()) {
+      if (!s.is_object()) continue;
+      t.push_back({name, Percent(s["above_1_percent"]), Percent(s["above_2_percent"]),
+                   Percent(s["above_5_percent"]), Percent(s["median_relative_error_percent"]),
+                   std::to_string(s["counted"].get<long>()) + " (" +
+                       std::to_string(s["missing"].get<long>()) + ")"});
+    }
+    tables.emplace_back("Held-out SfM points (relative depth error)", t);
+  }
   return tables;
 }
 

@@ -10,9 +10,11 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core/mat.hpp>
 
+#include "gcpstereo/core/camera.h"
 #include "gcpstereo/core/labels.h"
 #include "gcpstereo/core/types.h"
 #include "gcpstereo/eval/lidar.h"
+#include "gcpstereo/gcp/sfm_gcps.h"
 #include "gcpstereo/pipeline/pipeline_config.h"
 
 namespace gcpstereo::pipeline::internal {
@@ -34,6 +36,8 @@ struct GcpStageResult {
                                                     // held-out scan points (eval.lidar_holdout)
   bool holdout_in_disparity = false;                // values are disparities (rectified data)
   int lidar_holdout_not_visible = 0;  // held-out points failing the visibility test: not scored
+  std::vector<eval::ReferencePoint> sfm_holdout;  // depths of the held-out SfM points
+                                                  // (eval.sfm_holdout)
 };
 // The label space stereo GCPs search, given the GCPs of the other sources (empty when there are
 // none): an automatic range then comes from those GCPs instead of the views' overlap.
@@ -42,6 +46,18 @@ using ProvisionalLabels = std::function<LabelSpace(const GcpSet& other_gcps)>;
 // the other sources' GCPs. The report lists the sources in the configuration's order.
 GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
                            const ProvisionalLabels& provisional_labels);
+
+// eval.sfm_holdout: the COLMAP model's points that the reference observes, projected into
+// `reference` and split by eval::CheckerboardSplit(eval.holdout_block_px): the points of the GCP
+// squares (for the sfm source; with gcp.sfm.projected also every point the reference does not
+// observe, wherever it projects) and the depths of the scoring squares' observed points. Points
+// behind the camera or outside the image are in neither part.
+struct SfmHoldout {
+  std::vector<gcp::SfmPoint> gcp_part;
+  std::vector<eval::ReferencePoint> scored;
+};
+SfmHoldout SplitSfmPointsForHoldout(const PipelineConfig& config, const std::string& reference_name,
+                                    const Camera& reference);
 
 // Continuous labels of the GCPs on the reference grid (NaN elsewhere), for propagation.
 cv::Mat SparseGcpLabels(const GcpSet& gcps, const LabelSpace& labels, cv::Size size);
@@ -70,7 +86,8 @@ struct EvaluationInputs {
   const std::vector<eval::ReferencePoint>* lidar_holdout = nullptr;
   bool holdout_in_disparity = false;
   int holdout_not_visible = 0;  // held-out scan points not scored (not visible from the camera)
-  int border_px = 0;            // ignored border of masks derived from a left-right check
+  const std::vector<eval::ReferencePoint>* sfm_holdout = nullptr;  // depths (eval.sfm_holdout)
+  int border_px = 0;  // ignored border of masks derived from a left-right check
 };
 nlohmann::json Evaluate(const Dataset& dataset, const EvaluationInputs& inputs,
                         std::vector<std::pair<std::string, cv::Mat>>* previews);

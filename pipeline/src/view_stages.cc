@@ -382,6 +382,7 @@ EvaluationResult EvaluationStage(const Dataset& dataset, const GcpStageResult& g
   inputs.lidar_holdout = &gcps.lidar_holdout;
   inputs.holdout_in_disparity = gcps.holdout_in_disparity;
   inputs.holdout_not_visible = gcps.lidar_holdout_not_visible;
+  inputs.sfm_holdout = &gcps.sfm_holdout;
   EvaluationResult evaluation;
   evaluation.metrics = Evaluate(dataset, inputs, &evaluation.previews);
   return evaluation;

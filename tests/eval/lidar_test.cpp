@@ -1,6 +1,7 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/eval/lidar.h"
 
+#include <cmath>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -12,6 +13,44 @@ namespace gcpstereo::eval {
 namespace {
 
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+
+TEST(Lidar, RelativeDepthScoreCountsEachPointOnce) {
+  cv::Mat depth(4, 4, CV_32F, cv::Scalar(10.0f));
+  depth.at<float>(0, 1) = 10.05f;  // 0.5 % off a reference of 10
+  depth.at<float>(0, 2) = 10.15f;  // 1.5 %
+  depth.at<float>(0, 3) = 9.7f;    // 3 %
+  depth.at<float>(1, 0) = 12.0f;   // 20 %
+  depth.at<float>(1, 1) = kNan;    // missing
+  const std::vector<ReferencePoint> points = {
+      {{0.0, 0.0}, 10.0},   // exact
+      {{1.2, -0.4}, 10.0},  // nearest pixel (1, 0)
+      {{2.0, 0.0}, 10.0},  {{3.0, 0.0}, 10.0}, {{0.0, 1.0}, 10.0},
+      {{1.0, 1.0}, 10.0},  {{4.0, 0.0}, 10.0},  // outside
+      {{2.0, 2.0}, 0.0},                        // invalid reference
+  };
+  const RelativeDepthScore score = EvaluateRelativeDepth(depth, points);
+  EXPECT_EQ(score.counted, 6);
+  EXPECT_EQ(score.outside, 1);
+  EXPECT_EQ(score.invalid_reference, 1);
+  EXPECT_EQ(score.missing, 1);
+  ASSERT_EQ(score.above_percent.size(), 3u);
+  EXPECT_NEAR(score.above_percent[0], 100.0 * 4 / 6, 1e-9);  // 1.5, 3, 20 %, missing
+  EXPECT_NEAR(score.above_percent[1], 100.0 * 3 / 6, 1e-9);  // 3, 20 %, missing
+  EXPECT_NEAR(score.above_percent[2], 100.0 * 2 / 6, 1e-9);  // 20 %, missing
+  // Errors 0, 0.5, 1.5, 3, 20, ∞ %: the median is the mean of 1.5 and 3 (float rounding aside).
+  EXPECT_NEAR(score.median_percent, 2.25, 1e-4);
+  const nlohmann::json j = score.ToJson();
+  EXPECT_NEAR(j["above_5_percent"].get<double>(), 100.0 * 2 / 6, 1e-9);
+  EXPECT_EQ(j["missing"], 1);
+
+  // More than half missing: the median is infinite, null in JSON.
+  cv::Mat none(4, 4, CV_32F, cv::Scalar(kNan));
+  const RelativeDepthScore empty = EvaluateRelativeDepth(none, points);
+  EXPECT_TRUE(std::isinf(empty.median_percent));
+  EXPECT_TRUE(empty.ToJson()["median_relative_error_percent"].is_null());
+  EXPECT_EQ(empty.above_percent[0], 100.0);
+  EXPECT_THROW(EvaluateRelativeDepth(depth, points, {0.01, 0.0}), ConfigError);
+}
 
 TEST(Lidar, CheckerboardSplitCounts) {
   // Every pixel centre of a 32×16 image with 8-px blocks: 4×2 blocks, 4 even and 4 odd.

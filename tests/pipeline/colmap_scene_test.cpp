@@ -23,6 +23,7 @@
 #include "gcpstereo/io/dataset_io.h"
 #include "gcpstereo/io/pfm.h"
 #include "gcpstereo/io/point_cloud_io.h"
+#include "gcpstereo/pipeline/evaluate.h"
 #include "gcpstereo/pipeline/run.h"
 #include "gcpstereo/pipeline/scene.h"
 #include "gcpstereo/synth/generator.h"
@@ -159,6 +160,58 @@ TEST_F(ColmapSceneRun, SfmGcpsLieOnTheSurfaceAndCombineWithLidar) {
   EXPECT_LE(both["gcps"]["count"].get<int>(), sum);
 }
 
+// eval.sfm_holdout: the model's points the reference observes are split by the 8-px checkerboard;
+// the sfm GCPs come only from the GCP squares, the other squares' points score the depth maps.
+TEST_F(ColmapSceneRun, SfmHoldoutScoresTheSquaresTheGcpsDidNotUse) {
+  const std::vector<std::string> view = {
+      "dataset.reference=0005.png", "dataset.neighbors=[0004.png, 0006.png]", "gcp.sources=[sfm]"};
+  std::vector<std::string> with_holdout = view;
+  with_holdout.push_back("eval.sfm_holdout=true");
+  const json all = Run("colmap", "sfm_all_0005", view);
+  const json held = Run("colmap", "sfm_holdout_0005", with_holdout);
+  EXPECT_FALSE(all["metrics"].contains("sfm_holdout"));
+  ASSERT_TRUE(held["metrics"].contains("sfm_holdout")) << held["metrics"].dump();
+  const json& score = held["metrics"]["sfm_holdout"]["result"];
+  const json& source = held["gcps"]["sources"][0];
+  const json& source_all = all["gcps"]["sources"][0];
+  // Every observed point in front of the camera and inside the image is in exactly one half.
+  const int in_image = source_all["input"].get<int>() - source_all["outside_image"].get<int>() -
+                       source_all["behind_camera"].get<int>();
+  EXPECT_EQ(source["input"].get<int>() + score["counted"].get<int>(), in_image);
+  EXPECT_GT(score["counted"].get<int>(), in_image / 3);
+  EXPECT_GT(source["input"].get<int>(), in_image / 3);
+  EXPECT_EQ(score["outside"].get<int>(), 0);
+
+  // Every GCP lies in a GCP square (block (bc, br) with bc + br even).
+  const Camera camera = io::ReadStrechaCamera(*dir_ + "/strecha/cameras/0005.png.camera");
+  const PointCloud gcps = io::ReadPointCloud(*dir_ + "/sfm_holdout_0005/gcps.ply");
+  ASSERT_GT(gcps.size(), 20u);
+  for (const Eigen::Vector3f& p : gcps.points) {
+    Eigen::Vector2d pixel;
+    double depth = 0;
+    ASSERT_TRUE(camera.Project(p.cast<double>(), &pixel, &depth));
+    const int col = static_cast<int>(std::floor(pixel.x() + 0.5));
+    const int row = static_cast<int>(std::floor(pixel.y() + 0.5));
+    EXPECT_EQ((col / 8 + row / 8) % 2, 0) << pixel.transpose();
+  }
+
+  // The model's points are the laser's (on the true surface): the depth map agrees with most of
+  // them, and the share above each threshold falls as the threshold grows.
+  const double above1 = score["above_1_percent"], above2 = score["above_2_percent"];
+  const double above5 = score["above_5_percent"];
+  EXPECT_GE(above1, above2);
+  EXPECT_GE(above2, above5);
+  EXPECT_LT(score["median_relative_error_percent"].get<double>(), 2.0) << score.dump();
+  EXPECT_LT(above5, 25.0) << score.dump();
+  EXPECT_TRUE(held["metrics"]["sfm_holdout"].contains("propagated"));
+
+  // `gcpstereo eval --run` makes the same split again and scores the same points.
+  EvalRequest request;
+  request.run_folder = *dir_ + "/sfm_holdout_0005";
+  EXPECT_EQ(json::parse(RunEvaluation(request))["metrics"]["sfm_holdout"],
+            held["metrics"]["sfm_holdout"]);
+}
+
 // Image names with a sub-folder: views/<folder>/<name>/ in the scene, and `fuse` of those folders
 // gives the scene's model.
 TEST_F(ColmapSceneRun, ImageNamesWithSubFolders) {
@@ -190,6 +243,20 @@ TEST(ColmapSfmConfig, SfmNeedsAColmapModel) {
   EXPECT_EQ(error,
             "gcp.sources = sfm. Violated constraint: sfm needs dataset.format colmap (the SfM "
             "points are the COLMAP model's), not strecha");
+}
+
+TEST(ColmapSfmConfig, SfmHoldoutNeedsAColmapModel) {
+  LoadedConfig config;
+  std::string error = "(no error)";
+  try {
+    config.Load("", {"dataset.format=strecha", "dataset.path=/x", "dataset.reference=\"0005\"",
+                     "eval.sfm_holdout=true"});
+  } catch (const Error& e) {
+    error = e.what();
+  }
+  EXPECT_EQ(error,
+            "eval.sfm_holdout = true. Violated constraint: false unless dataset.format is colmap "
+            "(the scored points are the COLMAP model's)");
 }
 
 }  // namespace

@@ -219,4 +219,64 @@ cv::Mat RenderPointErrors(const cv::Mat& image_bgr, const cv::Mat& map,
   return out;
 }
 
+nlohmann::json RelativeDepthScore::ToJson() const {
+  nlohmann::json j;
+  j["definition"] =
+      "relative depth error |z - z_ref| / z_ref at the point's nearest pixel; a missing estimate "
+      "counts as above every threshold";
+  j["counted"] = counted;
+  j["outside"] = outside;
+  j["invalid_reference"] = invalid_reference;
+  j["missing"] = missing;
+  for (size_t i = 0; i < thresholds.size(); ++i) {
+    j["above_" + internal::FormatDouble(100.0 * thresholds[i]) + "_percent"] =
+        internal::JsonNumber(above_percent[i]);
+  }
+  j["median_relative_error_percent"] = internal::JsonNumber(median_percent);
+  return j;
+}
+
+RelativeDepthScore EvaluateRelativeDepth(const cv::Mat& depth,
+                                         const std::vector<ReferencePoint>& points,
+                                         const std::vector<double>& thresholds) {
+  internal::CheckFloatMap(depth, "evaluated depth map");
+  for (const double t : thresholds) {
+    if (!(t > 0.0)) {
+      throw ConfigError(ViolatedConstraint("relative depth threshold", FormatNumber(t), "> 0"));
+    }
+  }
+  RelativeDepthScore score;
+  score.thresholds = thresholds;
+  std::vector<double> errors;
+  errors.reserve(points.size());
+  for (const ReferencePoint& p : points) {
+    const std::int64_t col = NearestIndex(p.pixel.x());
+    const std::int64_t row = NearestIndex(p.pixel.y());
+    if (!std::isfinite(p.pixel.x()) || !std::isfinite(p.pixel.y()) || col < 0 || row < 0 ||
+        col >= depth.cols || row >= depth.rows) {
+      ++score.outside;
+      continue;
+    }
+    if (!std::isfinite(p.value) || p.value <= 0.0) {
+      ++score.invalid_reference;
+      continue;
+    }
+    ++score.counted;
+    const float estimate = depth.at<float>(static_cast<int>(row), static_cast<int>(col));
+    if (!std::isfinite(estimate) || estimate <= 0.0f) {
+      ++score.missing;
+      errors.push_back(std::numeric_limits<double>::infinity());
+    } else {
+      errors.push_back(std::abs(static_cast<double>(estimate) - p.value) / p.value);
+    }
+  }
+  for (const double t : thresholds) {
+    const auto above = std::count_if(errors.begin(), errors.end(), [t](double r) { return r > t; });
+    score.above_percent.push_back(internal::Percent(above, score.counted));
+  }
+  score.median_percent =
+      errors.empty() ? std::numeric_limits<double>::quiet_NaN() : 100.0 * internal::Median(&errors);
+  return score;
+}
+
 }  // namespace gcpstereo::eval

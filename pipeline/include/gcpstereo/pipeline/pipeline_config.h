@@ -167,6 +167,9 @@ struct EvalOptions {
   // Split the LiDAR scan by an 8×8-pixel checkerboard of blocks: one half are GCPs, the other
   // half scores the result (KITTI-style bad-3), as no dense ground truth exists.
   bool lidar_holdout = false;
+  // The same split of the reference's structure-from-motion points (COLMAP data sets): one half
+  // may feed the sfm GCP source, the other half scores the depth map by relative depth error.
+  bool sfm_holdout = false;
   int holdout_block_px = 8;
   SceneEvalOptions scene;  // eval.scene.*
 };

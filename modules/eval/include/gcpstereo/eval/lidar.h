@@ -92,6 +92,32 @@ struct LidarScore {
 LidarScore EvaluateAgainstPoints(const cv::Mat& map, const std::vector<ReferencePoint>& points,
                                  const LidarScoreOptions& options = {});
 
+// Scale-free score of a DEPTH map against reference depths (eval.sfm_holdout: the held-out points
+// of a structure-from-motion model, whose unit is arbitrary). Same nearest-pixel estimate and
+// outside / invalid_reference / counted / missing definitions as LidarScore; per counted point the
+// relative error r = |estimate − reference| / reference, a missing estimate counting as r = ∞:
+//   above_percent[i]: percent of counted points with r > thresholds[i] (0 when counted = 0);
+//   median_percent:   100 · the median of r over the counted points (∞ → null in JSON;
+//                     NaN when counted = 0).
+struct RelativeDepthScore {
+  std::vector<double> thresholds;  // fractions, e.g. 0.01 for 1 %
+  std::int64_t counted = 0;
+  std::int64_t outside = 0;
+  std::int64_t invalid_reference = 0;
+  std::int64_t missing = 0;
+  std::vector<double> above_percent;
+  double median_percent = 0.0;
+
+  nlohmann::json ToJson() const;
+};
+
+// `depth`: CV_32F (non-finite or <= 0 = no estimate). Throws Error on a wrong type and
+// ConfigError for a threshold that is not positive.
+RelativeDepthScore EvaluateRelativeDepth(const cv::Mat& depth,
+                                         const std::vector<ReferencePoint>& points,
+                                         const std::vector<double>& thresholds = {0.01, 0.02,
+                                                                                  0.05});
+
 // The reference points on the darkened reference image, coloured by the same definitions: green
 // |e| <= bad1_abs_px, yellow bad-1 only, red bad-3, magenta no estimate (outside / invalid
 // reference points are not drawn). image_bgr: CV_8UC3 of the map's size. Throws Error otherwise.
