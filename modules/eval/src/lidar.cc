@@ -116,20 +116,39 @@ nlohmann::json LidarScore::ToJson() const {
 // projected LiDAR scan (see CheckerboardSplit), which never fed the GCP energy.
 namespace {
 
-// How one reference point scores against `map` (the definitions of LidarScore).
-enum class PointClass { kOutside, kInvalidReference, kMissing, kBad3, kBad1, kGood };
-PointClass ClassifyPoint(const cv::Mat& map, const ReferencePoint& p,
-                         const LidarScoreOptions& options, double* error) {
+// The map's estimate at a reference point's nearest pixel, with the outside / invalid_reference
+// / missing definitions of LidarScore (shared by every score against points).
+enum class PointEstimate { kOutside, kInvalidReference, kMissing, kValid };
+PointEstimate EstimateAt(const cv::Mat& map, const ReferencePoint& p, double* estimate) {
   const std::int64_t col = NearestIndex(p.pixel.x());
   const std::int64_t row = NearestIndex(p.pixel.y());
   if (!std::isfinite(p.pixel.x()) || !std::isfinite(p.pixel.y()) || col < 0 || row < 0 ||
       col >= map.cols || row >= map.rows) {
-    return PointClass::kOutside;
+    return PointEstimate::kOutside;
   }
-  if (!std::isfinite(p.value) || p.value <= 0.0) return PointClass::kInvalidReference;
-  const float estimate = map.at<float>(static_cast<int>(row), static_cast<int>(col));
-  if (!std::isfinite(estimate) || estimate <= 0.0f) return PointClass::kMissing;
-  *error = std::abs(static_cast<double>(estimate) - p.value);
+  if (!std::isfinite(p.value) || p.value <= 0.0) return PointEstimate::kInvalidReference;
+  const float value = map.at<float>(static_cast<int>(row), static_cast<int>(col));
+  if (!std::isfinite(value) || value <= 0.0f) return PointEstimate::kMissing;
+  *estimate = value;
+  return PointEstimate::kValid;
+}
+
+// How one reference point scores against `map` (the definitions of LidarScore).
+enum class PointClass { kOutside, kInvalidReference, kMissing, kBad3, kBad1, kGood };
+PointClass ClassifyPoint(const cv::Mat& map, const ReferencePoint& p,
+                         const LidarScoreOptions& options, double* error) {
+  double estimate = 0.0;
+  switch (EstimateAt(map, p, &estimate)) {
+    case PointEstimate::kOutside:
+      return PointClass::kOutside;
+    case PointEstimate::kInvalidReference:
+      return PointClass::kInvalidReference;
+    case PointEstimate::kMissing:
+      return PointClass::kMissing;
+    case PointEstimate::kValid:
+      break;
+  }
+  *error = std::abs(estimate - p.value);
   if (*error > options.bad_abs_px && *error > options.bad_rel * std::abs(p.value)) {
     return PointClass::kBad3;
   }
@@ -250,24 +269,23 @@ RelativeDepthScore EvaluateRelativeDepth(const cv::Mat& depth,
   std::vector<double> errors;
   errors.reserve(points.size());
   for (const ReferencePoint& p : points) {
-    const std::int64_t col = NearestIndex(p.pixel.x());
-    const std::int64_t row = NearestIndex(p.pixel.y());
-    if (!std::isfinite(p.pixel.x()) || !std::isfinite(p.pixel.y()) || col < 0 || row < 0 ||
-        col >= depth.cols || row >= depth.rows) {
-      ++score.outside;
-      continue;
-    }
-    if (!std::isfinite(p.value) || p.value <= 0.0) {
-      ++score.invalid_reference;
-      continue;
-    }
-    ++score.counted;
-    const float estimate = depth.at<float>(static_cast<int>(row), static_cast<int>(col));
-    if (!std::isfinite(estimate) || estimate <= 0.0f) {
-      ++score.missing;
-      errors.push_back(std::numeric_limits<double>::infinity());
-    } else {
-      errors.push_back(std::abs(static_cast<double>(estimate) - p.value) / p.value);
+    double estimate = 0.0;
+    switch (EstimateAt(depth, p, &estimate)) {
+      case PointEstimate::kOutside:
+        ++score.outside;
+        break;
+      case PointEstimate::kInvalidReference:
+        ++score.invalid_reference;
+        break;
+      case PointEstimate::kMissing:
+        ++score.counted;
+        ++score.missing;
+        errors.push_back(std::numeric_limits<double>::infinity());
+        break;
+      case PointEstimate::kValid:
+        ++score.counted;
+        errors.push_back(std::abs(estimate - p.value) / p.value);
+        break;
     }
   }
   for (const double t : thresholds) {
