@@ -221,7 +221,7 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
     if (names[i] == "stereo") order.push_back(i);
   }
   LabelSpace provisional_labels;
-  json lidar_motion;
+  json lidar_motion;  // gcp.lidar.motion: what was compensated, for report.json
   std::vector<gcp::SfmPoint> sfm_gcp_part;  // eval.sfm_holdout: the GCP squares' SfM points
   if (config.eval.sfm_holdout) {
     SfmHoldout holdout = SplitSfmPointsForHoldout(config, dataset.reference.name, reference);
@@ -229,7 +229,7 @@ GcpStageResult RunGcpStage(const PipelineConfig& config, const Dataset& dataset,
     sfm_gcp_part = std::move(holdout.gcp_part);
     spdlog::info("SfM hold-out: {} points as sfm GCP candidates, {} points for scoring",
                  sfm_gcp_part.size(), result.sfm_holdout.size());
-  }  // gcp.lidar.motion: what was compensated, for report.json
+  }
 
   for (const size_t index : order) {
     const std::string& source = names[index];
