@@ -33,6 +33,7 @@
 namespace gcpstereo::pipeline {
 namespace {
 
+using gcpstereo::testing::ErrorOf;
 using gcpstereo::testing::FastTinySetting;
 using gcpstereo::testing::ReadFile;
 using gcpstereo::testing::WriteColmapWorkspace;
@@ -231,30 +232,23 @@ TEST_F(ColmapSceneRun, ImageNamesWithSubFolders) {
   EXPECT_EQ(ReadFile(*dir_ + "/sub_fused/fused.ply"), ReadFile(*dir_ + "/sub_scene/fused.ply"));
 }
 
+// The message a configuration of the Strecha layout with `key_value` gets.
+std::string StrechaConfigError(const std::string& key_value) {
+  return ErrorOf([&] {
+    LoadedConfig config;
+    config.Load(
+        "", {"dataset.format=strecha", "dataset.path=/x", "dataset.reference=\"0005\"", key_value});
+  });
+}
+
 TEST(ColmapSfmConfig, SfmNeedsAColmapModel) {
-  LoadedConfig config;
-  std::string error = "(no error)";
-  try {
-    config.Load("", {"dataset.format=strecha", "dataset.path=/x", "dataset.reference=\"0005\"",
-                     "gcp.sources=[sfm]"});
-  } catch (const Error& e) {
-    error = e.what();
-  }
-  EXPECT_EQ(error,
+  EXPECT_EQ(StrechaConfigError("gcp.sources=[sfm]"),
             "gcp.sources = sfm. Violated constraint: sfm needs dataset.format colmap (the SfM "
             "points are the COLMAP model's), not strecha");
 }
 
 TEST(ColmapSfmConfig, SfmHoldoutNeedsAColmapModel) {
-  LoadedConfig config;
-  std::string error = "(no error)";
-  try {
-    config.Load("", {"dataset.format=strecha", "dataset.path=/x", "dataset.reference=\"0005\"",
-                     "eval.sfm_holdout=true"});
-  } catch (const Error& e) {
-    error = e.what();
-  }
-  EXPECT_EQ(error,
+  EXPECT_EQ(StrechaConfigError("eval.sfm_holdout=true"),
             "eval.sfm_holdout = true. Violated constraint: false unless dataset.format is colmap "
             "(the scored points are the COLMAP model's)");
 }
