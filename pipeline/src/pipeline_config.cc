@@ -371,6 +371,16 @@ void PipelineConfig::Register(config::Schema* s) {
          {"upper-bound control of the robust GCP penalty, eq. 7 (lost from the paper's text; "
           "measured: 0.5)",
           "", "η"});
+  s->Add("optimizer.gcp_confidence", &optimizer.energy.gcp_confidence, Range::Between(0.0, 1.0),
+         {"how far each pixel's data confidence (the peak ratio of its cost curve, 0 flat … 1 one "
+          "sharp minimum) lowers its GCP weight: λr·(1 − β·c_p); 0 = the paper's one λr for every "
+          "pixel",
+          "", "β"});
+  s->Add("optimizer.gcp_confidence_radius", &optimizer.energy.gcp_confidence_radius,
+         Range::Between(0, 10),
+         {"radius of the window whose averaged costs give the data confidence of "
+          "optimizer.gcp_confidence (0 = the pixel's own cost curve)",
+          "px"});
   s->Add("optimizer.data_weight", &optimizer.energy.data_weight, Range::GreaterThan(0.0),
          {"scale of the matching costs in the energy"});
   s->Add("optimizer.use_gcp_energy", &optimizer.energy.use_gcp_energy,

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/optimize/refinement.h"
 #include "test_problems.h"
 
 namespace gcpstereo::optimize {
@@ -88,7 +89,12 @@ TEST(ExpansionMove, GraphEnergyEqualsDirectEnergyAndTheMoveIsOptimal) {
   std::mt19937 rng(7);
   for (int trial = 0; trial < 40; ++trial) {
     const int num_labels = 2 + trial % 5;
-    const OwnedMrfProblem owned = RandomProblem(3, 3, num_labels, 3000 + trial, 0.3);
+    OwnedMrfProblem owned = RandomProblem(3, 3, num_labels, 3000 + trial, 0.3);
+    if (trial % 2 == 1) {  // eq. (9): a prior weight per pixel, some 0
+      owned.prior_weight = cv::Mat(3, 3, CV_32F);
+      cv::randu(owned.prior_weight, 0.0, 1.0);
+      owned.prior_weight.at<float>(1, 1) = 0.0f;
+    }
     const MrfProblem problem = owned.View();
     EnergyOptions energy;
     energy.truncation = 1.0 + trial % 3;
@@ -266,6 +272,32 @@ TEST(AlphaExpansion, DeterministicAndStartsFromGivenLabels) {
   const ExpansionResult d = AlphaExpansion(problem, EnergyOptions(), options, c.labels);
   EXPECT_EQ(d.moves_accepted, 0);
   EXPECT_EQ(d.breakdown.total(), c.breakdown.total());
+}
+
+// ω_p = 0 everywhere is no GCP energy at all: the same labels as use_gcp_energy = false, before
+// and after refinement.
+TEST(AlphaExpansion, ZeroPriorWeightsAreNoPrior) {
+  testing::SceneProblem scene = MakeScene(40, 30, 16, 5);
+  // A strong prior that is wrong everywhere, so that with any weight it moves labels.
+  scene.problem.prior = cv::Mat(30, 40, CV_32F, cv::Scalar(15.0f));
+  EnergyOptions without;
+  without.use_gcp_energy = false;
+  const ExpansionResult reference = AlphaExpansion(scene.problem.View(), without, {});
+  EnergyOptions with;
+  with.lambda_r = 100.0;
+  const ExpansionResult pulled = AlphaExpansion(scene.problem.View(), with, {});
+  ASSERT_GT(cv::countNonZero(pulled.labels != reference.labels), 0);
+  scene.problem.prior_weight = cv::Mat(30, 40, CV_32F, cv::Scalar(0.0f));
+  const ExpansionResult weighted = AlphaExpansion(scene.problem.View(), with, {});
+  EXPECT_EQ(cv::countNonZero(weighted.labels != reference.labels), 0);
+  EXPECT_EQ(weighted.breakdown.gcp, 0.0);
+  for (const RefinementMethod method : {RefinementMethod::kCeres, RefinementMethod::kIrls}) {
+    RefinementOptions refinement;
+    refinement.method = method;
+    const cv::Mat a = RefineSubLabel(scene.problem.View(), reference.labels, without, refinement);
+    const cv::Mat b = RefineSubLabel(scene.problem.View(), weighted.labels, with, refinement);
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << RefinementMethodName(method);
+  }
 }
 
 TEST(AlphaExpansion, RejectsBadInput) {

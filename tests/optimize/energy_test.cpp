@@ -83,6 +83,56 @@ TEST(Energy, HandComputedTwoPixels) {
   EXPECT_EQ(e.gcp, 0.0);
 }
 
+// Eq. (9): ω_p scales the GCP term of its pixel alone; ConfidencePriorWeights is 1 − β·c_p.
+TEST(Energy, PriorWeightsScaleTheGcpTermOfTheirPixel) {
+  OwnedMrfProblem owned{CostVolume(cv::Rect(0, 0, 2, 1), 3, 100.0f), cv::Mat(1, 2, CV_8UC3),
+                        cv::Mat(1, 2, CV_32F, cv::Scalar(1.0f))};
+  owned.image.setTo(cv::Scalar(7, 7, 7));
+  const float costs[2][3] = {{0, 50, 100}, {40, 40, 40}};  // decisive | flat
+  for (int c = 0; c < 2; ++c) {
+    for (int l = 0; l < 3; ++l) owned.data.SetCost(0, c, l, costs[c][l]);
+  }
+  EnergyOptions options;
+  const cv::Mat labels = (cv::Mat_<int>(1, 2) << 0, 2);
+  const double psi0 = GcpPenalty(0, 1.0, options), psi2 = GcpPenalty(2, 1.0, options);
+  EnergyBreakdown plain, weighted;
+  ComputeEnergy(owned.View(), labels, options, &plain);
+  EXPECT_DOUBLE_EQ(plain.gcp, options.lambda_r * (psi0 + psi2));
+
+  EXPECT_TRUE(ConfidencePriorWeights(owned.data, options).empty());  // β = 0: the paper
+  options.gcp_confidence = 0.5;
+  options.gcp_confidence_radius = 0;  // each pixel's own curve (the default window mixes the two)
+  owned.prior_weight = ConfidencePriorWeights(owned.data, options);
+  ASSERT_EQ(owned.prior_weight.type(), CV_32F);
+  // The peak ratio (cost::PeakRatioConfidence): c = 1 − (0 + 1)/(100 + 1) for the decisive
+  // curve (no second minimum: Φ2 = its highest cost; ε = 1 % of max_cost), 0 for the flat one.
+  EXPECT_NEAR(owned.prior_weight.at<float>(0, 0), 1.0 - 0.5 * (1.0 - 1.0 / 101.0), 1e-6);
+  EXPECT_FLOAT_EQ(owned.prior_weight.at<float>(0, 1), 1.0f);
+  ComputeEnergy(owned.View(), labels, options, &weighted);
+  EXPECT_NEAR(weighted.gcp, options.lambda_r * (owned.prior_weight.at<float>(0, 0) * psi0 + psi2),
+              1e-12);
+  EXPECT_EQ(weighted.data, plain.data);
+  EXPECT_EQ(weighted.smooth, plain.smooth);
+
+  owned.prior_weight = cv::Mat(1, 3, CV_32F, cv::Scalar(1.0f));
+  EXPECT_THROW(owned.View().Validate(), Error);
+  options.gcp_confidence = 1.5;
+  try {
+    options.Check();
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "optimizer.gcp_confidence = 1.5. Violated constraint: in [0, 1]");
+  }
+  options.gcp_confidence = 0.5;
+  options.gcp_confidence_radius = 11;
+  try {
+    options.Check();
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "optimizer.gcp_confidence_radius = 11. Violated constraint: in [0, 10]");
+  }
+}
+
 TEST(Energy, GcpPenaltyIsBoundedByMinusLogEta) {
   EnergyOptions options;
   EXPECT_DOUBLE_EQ(GcpPenalty(3.0, 3.0, options), 0.0);

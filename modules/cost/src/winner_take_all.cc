@@ -1,7 +1,11 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/cost/winner_take_all.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -48,6 +52,102 @@ cv::Mat WinnerTakeAll(const CostVolume& volume) {
                       }
                     });
   return labels;
+}
+
+namespace {
+
+// c = 1 − (Φ1 + ε) / (Φ2 + ε) of one cost curve (see PeakRatioConfidence).
+double PeakRatio(const std::vector<double>& curve, double epsilon) {
+  const int num_labels = static_cast<int>(curve.size());
+  int best = 0;
+  double highest = curve[0];
+  for (int l = 1; l < num_labels; ++l) {
+    if (curve[l] < curve[best]) best = l;
+    highest = std::max(highest, curve[l]);
+  }
+  // The first label of a plateau is its one local minimum: strictly below the left neighbour,
+  // no higher than the right one.
+  double second = highest;
+  for (int l = 0; l < num_labels; ++l) {
+    if (l == best) continue;
+    const double v = curve[l];
+    if ((l == 0 || v < curve[l - 1]) && (l + 1 == num_labels || v <= curve[l + 1])) {
+      second = std::min(second, v);
+    }
+  }
+  return 1.0 - (curve[best] + epsilon) / (second + epsilon);
+}
+
+}  // namespace
+
+cv::Mat PeakRatioConfidence(const CostVolume& volume, int radius) {
+  if (volume.empty()) throw Error("peak-ratio confidence: the cost volume is empty");
+  if (radius < 0 || radius > kMaxConfidenceRadius) {
+    throw Error("peak-ratio confidence: the window radius " + std::to_string(radius) +
+                " is outside [0, " + std::to_string(kMaxConfidenceRadius) + "]");
+  }
+  const int width = volume.width();
+  const int height = volume.height();
+  const int num_labels = volume.num_labels();
+  cv::Mat confidence(height, width, CV_32F);
+  // In stored units (the fixed-point steps of max_cost): kNoData reads as max_cost.
+  constexpr std::int32_t kFullScale = CostVolume::kNoData - 1;
+  constexpr double kEpsilon = 0.01 * kFullScale;
+  auto cost = [&](int row, int col, int l) {
+    return std::min<std::int32_t>(volume.PixelData(row, col)[l], kFullScale);
+  };
+  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
+    // column_sums[col · L + l]: Σ of label l's cost over the window's rows at column col,
+    // slid down the rows (exact in int32: at most 21² costs of < 2^16 each).
+    std::vector<std::int32_t> column_sums(static_cast<std::size_t>(width) * num_labels, 0);
+    auto add_row = [&](int row, int sign) {
+      if (row < 0 || row >= height) return;
+      for (int col = 0; col < width; ++col) {
+        std::int32_t* sums = &column_sums[static_cast<std::size_t>(col) * num_labels];
+        for (int l = 0; l < num_labels; ++l) sums[l] += sign * cost(row, col, l);
+      }
+    };
+    for (int row = range.begin() - radius; row < range.begin() + radius; ++row) add_row(row, 1);
+    std::vector<std::int64_t> window(num_labels);
+    std::vector<double> curve(num_labels);
+    for (int row = range.begin(); row != range.end(); ++row) {
+      add_row(row + radius, 1);
+      const int rows_in = std::min(height - 1, row + radius) - std::max(0, row - radius) + 1;
+      std::fill(window.begin(), window.end(), 0);
+      for (int col = 0; col <= std::min(radius, width - 1); ++col) {
+        for (int l = 0; l < num_labels; ++l) {
+          window[l] += column_sums[static_cast<std::size_t>(col) * num_labels + l];
+        }
+      }
+      float* out = confidence.ptr<float>(row);
+      for (int col = 0; col < width; ++col) {
+        if (col > 0) {  // slide the window one column right
+          const int enter = col + radius;
+          const int leave = col - radius - 1;
+          for (int l = 0; l < num_labels; ++l) {
+            if (enter < width) {
+              window[l] += column_sums[static_cast<std::size_t>(enter) * num_labels + l];
+            }
+            if (leave >= 0) {
+              window[l] -= column_sums[static_cast<std::size_t>(leave) * num_labels + l];
+            }
+          }
+        }
+        const std::uint16_t* own = volume.PixelData(row, col);
+        if (std::all_of(own, own + num_labels,
+                        [](std::uint16_t c) { return c == CostVolume::kNoData; })) {
+          out[col] = 0.0f;
+          continue;
+        }
+        const int cols_in = std::min(width - 1, col + radius) - std::max(0, col - radius) + 1;
+        const double count = static_cast<double>(rows_in) * cols_in;
+        for (int l = 0; l < num_labels; ++l) curve[l] = window[l] / count;
+        out[col] = static_cast<float>(PeakRatio(curve, kEpsilon));
+      }
+      add_row(row - radius, -1);
+    }
+  });
+  return confidence;
 }
 
 namespace {

@@ -57,9 +57,14 @@ class ExpansionSolver {
     use_prior_ = options_.use_gcp_energy && !problem.prior.empty() && options_.lambda_r > 0.0;
     if (use_prior_) {
       prior_.resize(num_pixels_);
+      prior_scale_.resize(num_pixels_);
       for (int row = 0; row < height_; ++row) {
         const float* src = problem.prior.ptr<float>(row);
         std::copy(src, src + width_, prior_.begin() + static_cast<std::size_t>(row) * width_);
+        for (int col = 0; col < width_; ++col) {
+          prior_scale_[static_cast<std::size_t>(row) * width_ + col] =
+              options_.lambda_r * problem.PriorWeight(row, col);
+        }
       }
     }
     // λs·w_pq to the right and lower neighbour (0 at the border).
@@ -92,13 +97,13 @@ class ExpansionSolver {
   int blocks_y() const { return blocks_y_; }
   int block_px() const { return block_px_; }
 
-  // Φ·data_weight + λr·Ψ of label l at pixel p.
+  // Φ·data_weight + λr·ω_p·Ψ of label l at pixel p.
   double Unary(int p, int l) const {
     // The CostVolume's own (float) decoding, so that the graph and ComputeEnergy agree exactly.
     const std::uint16_t stored = costs_by_label_[static_cast<std::size_t>(l) * num_pixels_ + p];
     double u = options_.data_weight * static_cast<double>(cost_volume_->Decode(stored));
     if (use_prior_ && std::isfinite(prior_[p])) {
-      u += options_.lambda_r * GcpPenalty(l, prior_[p], options_);
+      u += prior_scale_[p] * GcpPenalty(l, prior_[p], options_);
     }
     return u;
   }
@@ -399,6 +404,7 @@ class ExpansionSolver {
   std::vector<std::uint16_t> costs_by_label_;
   bool use_prior_ = false;
   std::vector<float> prior_;
+  std::vector<double> prior_scale_;  // λr·ω_p
   std::vector<double> weight_right_, weight_down_;
   std::vector<int> labels_;
   std::vector<double> unary_current_;

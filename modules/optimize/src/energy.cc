@@ -35,6 +35,11 @@ void EnergyOptions::Check() const {
   Require(eta > 0.0 && eta < 1.0, "optimizer.eta", eta, "in (0, 1)");
   Require(std::isfinite(data_weight) && data_weight > 0.0, "optimizer.data_weight", data_weight,
           "> 0");
+  Require(gcp_confidence >= 0.0 && gcp_confidence <= 1.0, "optimizer.gcp_confidence",
+          gcp_confidence, "in [0, 1]");
+  Require(gcp_confidence_radius >= 0 && gcp_confidence_radius <= cost::kMaxConfidenceRadius,
+          "optimizer.gcp_confidence_radius", gcp_confidence_radius, "in [0, 10]");
+  static_assert(cost::kMaxConfidenceRadius == 10, "the message above names the bound");
 }
 
 void MrfProblem::Validate() const {
@@ -47,6 +52,12 @@ void MrfProblem::Validate() const {
   if (!prior.empty() &&
       (prior.type() != CV_32F || prior.cols != data->width() || prior.rows != data->height())) {
     throw Error("MRF problem: the prior (" + SizeString(prior) +
+                ") must be empty or CV_32F of the cost volume's region " + region);
+  }
+  if (!prior_weight.empty() &&
+      (prior_weight.type() != CV_32F || prior_weight.cols != data->width() ||
+       prior_weight.rows != data->height())) {
+    throw Error("MRF problem: the prior weights (" + SizeString(prior_weight) +
                 ") must be empty or CV_32F of the cost volume's region " + region);
   }
 }
@@ -64,6 +75,13 @@ double PairWeight(const cv::Vec3b& color_p, const cv::Vec3b& color_q,
 double GcpPenalty(double label, double prior_label, const EnergyOptions& options) {
   const double eta = options.eta;
   return -std::log((1.0 - eta) * std::exp(-std::abs(label - prior_label) / options.gamma_d) + eta);
+}
+
+cv::Mat ConfidencePriorWeights(const CostVolume& data, const EnergyOptions& options) {
+  if (options.gcp_confidence <= 0.0) return {};
+  cv::Mat weights = cost::PeakRatioConfidence(data, options.gcp_confidence_radius);
+  weights.convertTo(weights, CV_32F, -options.gcp_confidence, 1.0);
+  return weights;
 }
 
 double ComputeEnergy(const MrfProblem& problem, const cv::Mat& labels, const EnergyOptions& options,
@@ -104,7 +122,7 @@ double ComputeEnergy(const MrfProblem& problem, const cv::Mat& labels, const Ene
       if (use_prior) {
         const float prior = problem.prior.ptr<float>(row)[col];
         if (std::isfinite(prior)) {
-          e.gcp += options.lambda_r * GcpPenalty(l, prior, options);
+          e.gcp += options.lambda_r * problem.PriorWeight(row, col) * GcpPenalty(l, prior, options);
           ++e.num_prior_pixels;
         }
       }

@@ -55,8 +55,9 @@ class Difference final : public ceres::SizedCostFunction<1, 1, 1> {
 // smooth at d = 0.
 struct GcpTerm {
   double lambda_r, gamma_d, eta;
-  explicit GcpTerm(const EnergyOptions& options)
-      : lambda_r(options.lambda_r), gamma_d(options.gamma_d), eta(options.eta) {}
+  // `weight` = ω_p of eq. (9): the term of one pixel is λr·ω_p·Ψ̃.
+  explicit GcpTerm(const EnergyOptions& options, double weight = 1.0)
+      : lambda_r(options.lambda_r * weight), gamma_d(options.gamma_d), eta(options.eta) {}
   // λr·Ψ̃(d).
   double Penalty(double d) const {
     const double u = std::sqrt(d * d + kPriorSmoothing * kPriorSmoothing) - kPriorSmoothing;
@@ -88,9 +89,12 @@ struct GcpTerm {
 // residual block fewer per prior pixel for Ceres to carry; the objective is the same sum).
 class QuadraticDataAndGcp final : public ceres::SizedCostFunction<2, 1> {
  public:
-  QuadraticDataAndGcp(double sqrt_curvature, double minimum, double prior,
+  QuadraticDataAndGcp(double sqrt_curvature, double minimum, double prior, double prior_weight,
                       const EnergyOptions& options)
-      : sqrt_curvature_(sqrt_curvature), minimum_(minimum), prior_(prior), gcp_(options) {}
+      : sqrt_curvature_(sqrt_curvature),
+        minimum_(minimum),
+        prior_(prior),
+        gcp_(options, prior_weight) {}
   bool Evaluate(double const* const* x, double* residual, double** jacobians) const override {
     double* jacobian = jacobians ? jacobians[0] : nullptr;
     residual[0] = sqrt_curvature_ * (x[0][0] - minimum_);
@@ -123,6 +127,7 @@ struct GridProblem {
   std::vector<double> minimum;         // m_p
   std::vector<double> lower, upper;    // the box [l_p − 1, l_p + 1] ∩ [0, L − 1]
   std::vector<double> prior;           // D̂_p, NaN = none (or the prior is not used)
+  std::vector<double> prior_weight;    // ω_p of eq. (9) where the prior is finite
   struct Pair {
     int p, q;
     double weight;  // λs·w_pq
@@ -140,6 +145,7 @@ GridProblem MakeGridProblem(const MrfProblem& problem, const cv::Mat& labels,
   g.lower.resize(n);
   g.upper.resize(n);
   g.prior.assign(n, std::numeric_limits<double>::quiet_NaN());
+  g.prior_weight.assign(n, 1.0);
   g.pairs.reserve(2 * n);
   const bool use_prior =
       energy_options.use_gcp_energy && !problem.prior.empty() && energy_options.lambda_r > 0.0;
@@ -164,7 +170,12 @@ GridProblem MakeGridProblem(const MrfProblem& problem, const cv::Mat& labels,
       g.upper[p] = std::min(num_labels - 1, l + 1);
       if (use_prior) {
         const float prior = problem.prior.ptr<float>(row)[col];
-        if (std::isfinite(prior)) g.prior[p] = prior;
+        const double weight = problem.PriorWeight(row, col);
+        // ω_p = 0: no term at all (the weighted term would be 0 with a 0/0 Jacobian).
+        if (std::isfinite(prior) && weight > 0.0) {
+          g.prior[p] = prior;
+          g.prior_weight[p] = weight;
+        }
       }
       auto add_pair = [&](int q, int lq, const cv::Vec3b& cq) {
         if (std::abs(l - lq) >= energy_options.truncation) return;
@@ -206,7 +217,7 @@ void SolveWithCeres(const GridProblem& grid, const EnergyOptions& energy_options
     if (std::isfinite(grid.prior[p])) {
       ceres_problem.AddResidualBlock(
           &data_gcp_terms.emplace_back(grid.sqrt_curvature[p], grid.minimum[p], grid.prior[p],
-                                       energy_options),
+                                       grid.prior_weight[p], energy_options),
           nullptr, xp);
     } else {
       ceres_problem.AddResidualBlock(
@@ -261,7 +272,9 @@ double GridObjective(const GridProblem& grid, const EnergyOptions& energy_option
   for (std::size_t p = 0; p < x.size(); ++p) {
     const double r = grid.sqrt_curvature[p] * (x[p] - grid.minimum[p]);
     total += 0.5 * r * r;
-    if (std::isfinite(grid.prior[p])) total += gcp.Penalty(x[p] - grid.prior[p]);
+    if (std::isfinite(grid.prior[p])) {
+      total += grid.prior_weight[p] * gcp.Penalty(x[p] - grid.prior[p]);
+    }
   }
   for (const GridProblem::Pair& pair : grid.pairs) {
     const double r = std::abs(x[pair.p] - x[pair.q]);
@@ -329,7 +342,7 @@ void SolveWithIrls(const GridProblem& grid, const EnergyOptions& energy_options,
       const double a = grid.sqrt_curvature[p] * grid.sqrt_curvature[p];
       double diag = a, b = a * grid.minimum[p];
       if (std::isfinite(grid.prior[p])) {
-        const double weight = gcp.MajorizerWeight((*x)[p] - grid.prior[p]);
+        const double weight = grid.prior_weight[p] * gcp.MajorizerWeight((*x)[p] - grid.prior[p]);
         diag += weight;
         b += weight * grid.prior[p];
       }

@@ -143,7 +143,10 @@ TiledResult OptimizeTiled(cv::Size image_size, const MakeTileProblem& make_probl
     TileReport& report = result.tiles[t];
     report.region = region;
     const Timer setup_timer;
-    const OwnedMrfProblem owned = make_problem(region);
+    OwnedMrfProblem owned = make_problem(region);
+    if (energy_options.use_gcp_energy && !owned.prior.empty() && owned.prior_weight.empty()) {
+      owned.prior_weight = ConfidencePriorWeights(owned.data, energy_options);
+    }
     report.setup_seconds = setup_timer.ElapsedSeconds();
     report_progress(t, 0.3);
     const MrfProblem problem = owned.View();

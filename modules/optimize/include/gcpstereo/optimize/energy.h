@@ -14,8 +14,9 @@ namespace gcpstereo::optimize {
 //   E_data   = data_weight · Σ_p Φ(p, D_p)                                                  (2)
 //   E_smooth = λs · Σ_{{p,q} ∈ N4} w_pq · min(|D_p − D_q|, T)                               (3)
 //   w_pq     = max(exp(−c_pq / γc), ε),  c_pq = Euclidean distance of p's and q's RGB       (4)
-//   E_gcp    = λr · Σ_{p with a prior} Ψ(D_p, D̂_p)                                          (8)
+//   E_gcp    = λr · Σ_{p with a prior} ω_p · Ψ(D_p, D̂_p)                                    (8')
 //   Ψ(x, y)  = −ln((1 − η) · exp(−|x − y| / γd) + η)                                        (7)
+//   ω_p      = 1 − β · c_p   (our extension; β = 0, ω_p = 1: the paper's eq. 8)              (9)
 //
 // Units. D_p is a label INDEX (0 … L−1, integer for the discrete solution, fractional after
 // sub-label refinement), so |D_p − D_q|, T and γd are in LABEL STEPS for every label space. For
@@ -32,6 +33,12 @@ namespace gcpstereo::optimize {
 //  * `data_weight` makes the scale of Φ relative to λs explicit (default 1: the costs as the cost
 //    module produces them — BT summed over RGB, the plane sweep's truncated RGB norm).
 //  * η is not legible in the available text of the paper; default 0.1 (Ψ <= −ln η = 2.30).
+//  * Eq. (9), a deliberate extension: the paper's λr is one number for every pixel, so the prior
+//    pulls as hard where the images have already decided as where they cannot. ω_p lowers it by
+//    the pixel's data confidence c_p ∈ [0, 1] (cost::PeakRatioConfidence of the pixel's cost
+//    curve: 0 for a flat curve or two equal minima, near 1 for one sharp minimum), by the factor
+//    β (`gcp_confidence`). MrfProblem::prior_weight carries ω_p; OptimizeTiled fills it from the
+//    tile's costs when β > 0.
 // The defaults are the paper's printed numbers. They are not the best everywhere, and the best
 // weights depend on how reliable the GCPs are (tools/benchmark.py; bad-1 nonocc / KITTI held-out
 // bad-3):
@@ -57,12 +64,19 @@ struct EnergyOptions {
   double eta = 0.1;
   // Scale applied to every Φ(p, l) read from the cost volume, dimensionless. Range: > 0.
   double data_weight = 1.0;
+  // β of eq. (9): how far a pixel's data confidence lowers its GCP weight, ω_p = 1 − β·c_p.
+  // 0 = the paper (ω_p = 1); 1 = no prior where one label is certain. Range: [0, 1].
+  double gcp_confidence = 0.0;
+  // The window radius over which c_p averages the costs before the peak ratio, px (0 = the
+  // pixel's own curve). Range: [0, cost::kMaxConfidenceRadius]. Default 2: a 5×5 window.
+  int gcp_confidence_radius = 2;
   // false = the paper's baseline D (E_data + E_smooth only); the prior is then ignored.
   bool use_gcp_energy = true;
 
   // Throws ConfigError naming the YAML key (optimizer.lambda_s, optimizer.truncation,
   // optimizer.gamma_c, optimizer.epsilon, optimizer.lambda_r, optimizer.gamma_d, optimizer.eta,
-  // optimizer.data_weight).
+  // optimizer.data_weight, optimizer.gcp_confidence,
+  // optimizer.gcp_confidence_radius).
   void Check() const;
 };
 
@@ -71,20 +85,28 @@ struct MrfProblem {
   const CostVolume* data = nullptr;  // Φ(p, l) for the region; required
   cv::Mat image;  // CV_8UC3 (BGR) of the SAME region as `data`, for w_pq; required
   cv::Mat prior;  // CV_32F region-sized continuous label D̂_p, NaN = no prior; may be empty
+  // CV_32F region-sized ω_p of eq. (9), in [0, 1]; empty = 1 everywhere (the paper).
+  cv::Mat prior_weight;
 
   int width() const { return data ? data->width() : 0; }
   int height() const { return data ? data->height() : 0; }
   int num_labels() const { return data ? data->num_labels() : 0; }
-  // Throws Error when the cost volume is missing or the image/prior do not match its region.
+  // Throws Error when the cost volume is missing or the image/prior/prior weights do not match
+  // its region.
   void Validate() const;
+  // ω_p at a pixel (1 without prior weights).
+  double PriorWeight(int row, int col) const {
+    return prior_weight.empty() ? 1.0 : static_cast<double>(prior_weight.ptr<float>(row)[col]);
+  }
 };
 
 // An MRF problem that owns its costs and images (what a tile's `make_problem` returns).
 struct OwnedMrfProblem {
   CostVolume data;
-  cv::Mat image;  // CV_8UC3, region-sized
-  cv::Mat prior;  // CV_32F, region-sized or empty
-  MrfProblem View() const { return MrfProblem{&data, image, prior}; }
+  cv::Mat image;         // CV_8UC3, region-sized
+  cv::Mat prior;         // CV_32F, region-sized or empty
+  cv::Mat prior_weight;  // CV_32F, region-sized or empty
+  MrfProblem View() const { return MrfProblem{&data, image, prior, prior_weight}; }
 };
 
 struct EnergyBreakdown {
@@ -99,6 +121,11 @@ struct EnergyBreakdown {
 double PairWeight(const cv::Vec3b& color_p, const cv::Vec3b& color_q, const EnergyOptions& options);
 // Ψ(x, y) of eq. (7) (without λr); x, y in label steps.
 double GcpPenalty(double label, double prior_label, const EnergyOptions& options);
+
+// ω_p of eq. (9) for a problem's costs (CV_32F, region-sized): 1 − β·c_p with c_p
+// cost::PeakRatioConfidence over gcp_confidence_radius; an empty Mat when β = 0 (the paper:
+// ω_p = 1).
+cv::Mat ConfidencePriorWeights(const CostVolume& data, const EnergyOptions& options);
 
 // The energy (1) of an integer labelling (CV_32S, region-sized, values in [0, L)), computed
 // directly from the definitions above with double sums; independent of the graph-cut code.
