@@ -20,6 +20,11 @@ Suites
   table2    the paper's Table 2 on the Middlebury scenes (configs/middlebury_stereo.yaml):
             D without the GCP energy, D^ (propagated stereo GCPs), D with the GCP energy;
             bad-1 in nonocc / all / disc, and the run times.
+  paired    every scene with and without the GCP energy, the cells where GCPs lose marked
+            (issue 23): the Middlebury scenes two-view with stereo GCPs (table2's runs), the
+            same scenes multi-view with ground truth kept one per 16x16 block as GCPs, each
+            KITTI frame with the LiDAR half as GCPs (motion-compensated and raw scan), the
+            synthetic fountain view 0005 with laser GCPs at s = 16. About 40 minutes on 2 cores.
   endtoend  full runs per data set: fountain-P11 (configs/fountain_p11.yaml), the synthetic
             fountain (configs/synthetic_fountain.yaml; generated with gcpstereo synth if missing),
             the Middlebury scenes two-view, each KITTI frame (configs/kitti_lidar.yaml with
@@ -130,7 +135,7 @@ KITTI_FRAMES = ["0000000000", "0000000010", "0000000020", "0000000030", "0000000
 KITTI_MAX_DISPARITY = 127  # configs/kitti_lidar.yaml labels 0..127
 KITTI_LIDAR_MOTION = "registration"  # configs/kitti_lidar.yaml gcp.lidar.motion.mode
 
-SUITES = ["costs", "table2", "endtoend", "scene", "speed"]
+SUITES = ["costs", "table2", "paired", "endtoend", "scene", "speed"]
 
 
 class BenchError(Exception):
@@ -277,6 +282,7 @@ class Runner:
         self.out = os.path.abspath(args.out)
         self.reuse = args.reuse
         self.timeout = args.timeout
+        self.extra_sets = list(getattr(args, "set", None) or [])  # --set: after every suite's own
         self.gcpstereo = os.path.join(self.build, "gcpstereo")
         self.sgbm_program = os.path.join(self.build, "tools", "benchmarks",
                                          "gcpstereo_sgbm_baseline")
@@ -335,7 +341,7 @@ class Runner:
         folder = os.path.join(self.runs, key)
         command = [self.gcpstereo, "run", os.path.join(REPO, "configs", config), "-o", folder,
                    "-q"]
-        for item in sets:
+        for item in list(sets) + self.extra_sets:
             command += ["--set", item]
         report = self._execute(key, command, folder, "report.json")
         with open(report) as f:
@@ -369,7 +375,7 @@ class Runner:
         """gcpstereo fuse VIEWDIR... -o OUT/runs/KEY --set ...; returns (report dict, folder)."""
         folder = os.path.join(self.runs, key)
         command = [self.gcpstereo, "fuse"] + list(view_dirs) + ["-o", folder, "-q"]
-        for item in sets:
+        for item in list(sets) + self.extra_sets:
             command += ["--set", item]
         report = self._execute(key, command, folder, "report.json")
         with open(report) as f:
@@ -694,6 +700,130 @@ def suite_table2(runner, scenes):
             cell(d, "seconds", "%.1f s"), cell(g, "seconds", "%.1f s")))
     add_errors(md, rows)
     return {"middlebury": rows, "markdown": "\n".join(md)}
+
+
+# A cell where GCPs lose: the error with GCPs exceeds the one without by more than this many
+# percentage points (issue 23's "ties within 0.02 points count").
+PAIRED_TIE = 0.02
+
+
+def suite_paired(runner, scenes, frames, include_synthetic):
+    """Every scene with and without the GCP energy (optimizer.use_gcp_energy), same GCPs, same
+    costs; the tables mark every cell where the GCPs lose."""
+    rows = {"two-view": {}, "multi-view": {}, "kitti": {}, "kitti-raw": {}, "synthetic": {}}
+    both = (("without", "false"), ("with", "true"))
+
+    for scene in scenes:
+        name = scene["name"]
+        for tag, flag in both:
+            # The same runs as table2's: one invocation running both suites runs them once.
+            def two_view(flag=flag, tag=tag):
+                report, _ = runner.run("table2/%s/%s_gcp" % (name, tag), "middlebury_stereo.yaml",
+                                       stereo_sets(runner, scene) +
+                                       ["optimizer.use_gcp_energy=" + flag])
+                m = dig(report, "metrics", "middlebury", "result")
+                return {region: bad1(m, region) for region in ("nonocc", "all", "disc")}
+            measure(rows["two-view"].setdefault(name, {}), tag, two_view)
+
+            def multi_view(flag=flag, tag=tag):
+                gt = os.path.join(middlebury_path(runner, scene), scene["gt"])
+                report, _ = runner.run(
+                    "paired/multiview/%s/%s_gcp" % (name, tag), "middlebury_multiview.yaml",
+                    multiview_sets(runner, scene) +
+                    ["gcp.sources=[depth_map]", "gcp.depth_map.path=" + gt,
+                     "gcp.depth_map.kind=disparity",
+                     "gcp.depth_map.scale=%s" % scene["gt_scale"], "gcp.downsample=16",
+                     "optimizer.use_gcp_energy=" + flag])
+                m = dig(report, "metrics", "middlebury", "result")
+                return {region: bad1(m, region) for region in ("nonocc", "all", "disc")}
+            measure(rows["multi-view"].setdefault(name, {}), tag, multi_view)
+
+    for frame in frames:
+        for family, motion in (("kitti", KITTI_LIDAR_MOTION), ("kitti-raw", "off")):
+            for tag, flag in both:
+                def kitti(flag=flag, motion=motion, tag=tag):
+                    report, _ = runner.run(
+                        "paired/kitti/%s/%s/%s_gcp" % (frame, motion, tag), "kitti_lidar.yaml",
+                        kitti_sets(runner, frame) + ["gcp.lidar.motion.mode=" + motion,
+                                                     "optimizer.use_gcp_energy=" + flag])
+                    return kitti_holdout(report)
+                measure(rows[family].setdefault(frame, {}), tag, kitti)
+
+    if include_synthetic:
+        for tag, flag in both:
+            def synthetic(flag=flag, tag=tag):
+                data = runner.synth("fountain")
+                report, _ = runner.run("paired/synthetic-fountain/%s_gcp" % tag,
+                                       "synthetic_fountain.yaml",
+                                       synthetic_fountain_sets(data) +
+                                       ["optimizer.use_gcp_energy=" + flag])
+                return {"within_3sigma": within_3sigma(report)["within_3sigma"]}
+            measure(rows["synthetic"].setdefault("fountain view 0005", {}), tag, synthetic)
+
+    losses = []
+
+    def table(family, columns, lower_is_better=True):
+        out = []
+        for name, pair in rows[family].items():
+            cells = [name]
+            for column in columns:
+                a, b = pair.get("without", {}), pair.get("with", {})
+                if "error" in a or "error" in b or column not in a or column not in b:
+                    cells.append("error" if ("error" in a or "error" in b) else "")
+                    continue
+                delta = b[column] - a[column]
+                lose = delta > PAIRED_TIE if lower_is_better else delta < -PAIRED_TIE
+                if lose:
+                    losses.append("%s %s %s" % (family, name, column))
+                cells.append("%.2f → %.2f%s" % (a[column], b[column],
+                                                " **lose**" if lose else ""))
+            out.append("| " + " | ".join(cells) + " |")
+        means = []
+        for column in columns:
+            values = [(p["without"][column], p["with"][column]) for p in rows[family].values()
+                      if column in p.get("without", {}) and column in p.get("with", {})]
+            means.append("%.3f → %.3f" % (statistics.mean(v[0] for v in values),
+                                          statistics.mean(v[1] for v in values))
+                         if values else "")
+        if len(rows[family]) > 1:
+            out.append("| mean | " + " | ".join(means) + " |")
+        return out
+
+    md = ["# paired — every scene without → with the GCP energy",
+          "", "Each cell: the error without the GCP energy (optimizer.use_gcp_energy=false) → "
+          "with it, same GCPs and matching costs; **lose** marks a cell where the GCPs make it "
+          "worse by more than %.2f points. Extra settings on every run: %s." % (
+              PAIRED_TIE, ", ".join(runner.extra_sets) or "none")]
+    if rows["two-view"]:
+        md += ["", "Middlebury two-view with stereo GCPs (configs/middlebury_stereo.yaml, the "
+               "paper's Table 2 setting): bad-1 %.", "",
+               "| scene | nonocc | all | disc |", "|---|---:|---:|---:|"]
+        md += table("two-view", ["nonocc", "all", "disc"])
+    if rows["multi-view"]:
+        md += ["", "Middlebury multi-view plane sweep with ground truth kept one per 16×16 block "
+               "as GCPs (configs/middlebury_multiview.yaml, integer labels): bad-1 %.", "",
+               "| scene | nonocc | all | disc |", "|---|---:|---:|---:|"]
+        md += table("multi-view", ["nonocc", "all", "disc"])
+    for family, scan in (("kitti", "the motion-compensated scan (gcp.lidar.motion.mode: %s)"
+                          % KITTI_LIDAR_MOTION), ("kitti-raw", "the raw scan (motion.mode: off)")):
+        if rows[family]:
+            md += ["", "KITTI with half of %s as GCPs, scored on the other half "
+                   "(configs/kitti_lidar.yaml, eval.lidar_holdout=true): held-out bad-3 / bad-1 %%."
+                   % scan, "", "| frame | bad-3 | bad-1 |", "|---|---:|---:|"]
+            md += table(family, ["bad3", "bad1"])
+    if rows["synthetic"]:
+        md += ["", "Synthetic fountain view 0005 with laser GCPs at s = 16 "
+               "(configs/synthetic_fountain.yaml): pixels within 3σ, % (higher is better).", "",
+               "| view | within 3σ |", "|---|---:|"]
+        md += table("synthetic", ["within_3sigma"], lower_is_better=False)
+    md += ["", "GCPs lose in %d cell(s)%s" % (len(losses), (": " + "; ".join(losses))
+                                               if losses else ".")]
+    errors = {}
+    for family, family_rows in rows.items():
+        for name, pair in family_rows.items():
+            errors["%s %s" % (family, name)] = pair
+    add_errors(md, errors)
+    return {"paired": rows, "losses": losses, "markdown": "\n".join(md)}
 
 
 def stage_seconds(report):
@@ -1329,6 +1459,10 @@ def main(argv=None):
     parser.add_argument("--repeat", type=int, default=1, metavar="N",
                         help="speed suite: run each timed run N times, report the median time and "
                         "the largest peak memory (default: 1)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="a configuration override added to every gcpstereo run and fuse, "
+                        "after the suite's own (repeatable), e.g. --set optimizer.gcp_confidence=0.5 "
+                        "to measure an option on every scene; use a separate --out per variant")
     args = parser.parse_args(argv)
     if args.repeat < 1:
         parser.error("--repeat must be at least 1")
@@ -1366,7 +1500,8 @@ def main(argv=None):
             results = json.load(f)  # other suites' results are kept
     results["environment"] = {"build": runner.build, "data": runner.data,
                               "host": platform.node(), "python": platform.python_version(),
-                              "cpus": os.cpu_count(), "command": " ".join(sys.argv)}
+                              "cpus": os.cpu_count(), "command": " ".join(sys.argv),
+                              "sets": runner.extra_sets}
     # 'all' leaves out the scene suite (about 75 minutes on 2 cores) and the speed suite (it times
     # endtoend's runs again)
     suites = ([s for s in SUITES if s not in ("scene", "speed")] if args.suite == "all"
@@ -1381,6 +1516,8 @@ def main(argv=None):
             add_cost_errors(result)
         elif suite == "table2":
             result = suite_table2(runner, scenes)
+        elif suite == "paired":
+            result = suite_paired(runner, scenes, frames, include_synthetic)
         elif suite == "endtoend":
             result = suite_endtoend(runner, scenes, frames, include_fountain)
         elif suite == "speed":
