@@ -281,6 +281,12 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add(
       "cost.truncation", &cost.plane_sweep.truncation, Range::GreaterThan(0.0),
       {"plane sweep: per-neighbour truncation of the RGB difference norm", "RGB grey levels", "τ"});
+  s->Add("cost.sweep_measure", &cost.plane_sweep.measure, {"rgb", "zncc"},
+         {"plane sweep: photo-consistency of a sample: rgb = the pixel's truncated RGB difference "
+          "(paper), zncc = windowed zero-mean normalised cross-correlation of grey levels "
+          "(exposure-invariant), cost τ·min(1, 1 − ρ)"});
+  s->Add("cost.zncc_window_px", &cost.plane_sweep.zncc_window_px, Range::Between(3, 21),
+         {"plane sweep: side of the zncc window, odd", "px"});
   s->Add("cost.aggregation", &cost.plane_sweep.aggregation, {"mean", "best_k"},
          {"plane sweep: mean over the neighbours (paper) or mean of the best k (occlusions)"});
   s->Add("cost.best_k", &cost.plane_sweep.best_k, Range::AtLeast(1),

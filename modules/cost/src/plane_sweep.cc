@@ -16,6 +16,7 @@
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/system.h"
 #include "sweep_kernels.h"
+#include "zncc_sweep.h"
 
 namespace gcpstereo::cost {
 
@@ -23,6 +24,14 @@ void PlaneSweepOptions::Check() const {
   if (!(truncation > 0.0) || !std::isfinite(truncation)) {
     throw ConfigError(
         ViolatedConstraint("cost.truncation", internal::Str(truncation), "0 < truncation < inf"));
+  }
+  if (measure != "rgb" && measure != "zncc") {
+    throw ConfigError(ViolatedConstraint("cost.sweep_measure", measure, "one of rgb, zncc"));
+  }
+  if (zncc_window_px < 3 || zncc_window_px > internal::kMaxZnccWindowPx ||
+      zncc_window_px % 2 == 0) {
+    throw ConfigError(ViolatedConstraint("cost.zncc_window_px", internal::Str(zncc_window_px),
+                                         "odd, 3 <= zncc_window_px <= 21"));
   }
   if (aggregation != "mean" && aggregation != "best_k") {
     throw ConfigError(ViolatedConstraint("cost.aggregation", aggregation, "one of mean, best_k"));
@@ -129,10 +138,11 @@ void MeanOfBestK(std::vector<float>& per_neighbor, int num_neighbors, int width,
   }
 }
 
-// What every region of one sweep shares: the packed neighbour images and the homographies
-// H_{n,l} (index l · neighbours + n).
+// What every region of one sweep shares: the neighbour images (packed RGB, or grey for "zncc")
+// and the homographies H_{n,l} (index l · neighbours + n).
 struct SweepContext {
   std::vector<PackedImageBuffer> images;
+  std::vector<internal::GreyImage> grey_images;
   std::vector<Eigen::Matrix3d> homographies;
 };
 
@@ -146,7 +156,13 @@ SweepContext MakeSweepContext(const View& reference, const std::vector<View>& ne
   const int num_neighbors = static_cast<int>(neighbors.size());
   SweepContext context;
   context.images.reserve(neighbors.size());
-  for (const View& view : neighbors) context.images.push_back(MakePackedImage(view.image));
+  for (const View& view : neighbors) {
+    if (options.measure == "zncc") {
+      context.grey_images.push_back(internal::MakeGreyImage(view.image));
+    } else {
+      context.images.push_back(MakePackedImage(view.image));
+    }
+  }
 
   // H_{n,l} = K_n (R + t nᵀ / z_l) K_ref⁻¹ with X_n = R X_ref + t for the relative pose.
   const Camera& ref_camera = reference.camera;
@@ -186,6 +202,28 @@ CostVolume PlaneSweepPixelCost(const SweepContext& context, const View& referenc
   }
 
   const int num_labels = labels.count();
+  if (options.measure == "zncc") {
+    internal::ZnccSweepParams params;
+    params.window_px = options.zncc_window_px;
+    params.truncation = static_cast<float>(options.truncation);
+    params.best_k = options.aggregation == "best_k";
+    params.k = std::min(options.best_k, static_cast<int>(context.grey_images.size()));
+    params.min_voters = options.min_voters;
+    internal::ZnccSweepCounts counts;
+    CostVolume volume =
+        internal::ZnccSweep(reference.image, context.grey_images, context.homographies, num_labels,
+                            region, params, progress, &counts);
+    if (summary != nullptr) {
+      summary->samples = static_cast<std::int64_t>(region.area()) * num_labels *
+                         static_cast<std::int64_t>(context.grey_images.size());
+      summary->votes = counts.votes;
+      summary->no_data_costs = counts.no_data;
+      summary->volume_bytes = static_cast<std::int64_t>(volume.memory_bytes());
+      summary->seconds = timer.ElapsedSeconds();
+      summary->cancelled = counts.cancelled;
+    }
+    return volume;
+  }
   const int num_neighbors = static_cast<int>(context.images.size());
   const int width = region.width;
   const float truncation = static_cast<float>(options.truncation);

@@ -26,6 +26,17 @@ struct PlaneSweepOptions {
   // ≈45; 60 keeps that accuracy while bounding an occluded neighbour's influence (and fixes the
   // scale the smoothness weight λs is tuned against). Range: τ > 0.
   double truncation = 60.0;
+  // [cost.sweep_measure]: the photo-consistency of one neighbour's sample.
+  //   "rgb"  — the paper: the truncated RGB difference norm of the pixel alone (below);
+  //   "zncc" — exposure-invariant and windowed: ρ, the zero-mean normalised cross-correlation of
+  //   the grey levels over a zncc_window_px square around p and around its warps H_{n,l} q (the
+  //   plane-swept window), with a variance floor of 4 grey levels² so that a flat window
+  //   correlates with nothing; Φ_n = τ · min(1, 1 − ρ) (anti-correlation counts as no match).
+  //   Real photographs differ in exposure and white balance between views, which the RGB norm
+  //   reads as mismatch; and one pixel's colour is flat in weak texture, where a window is not.
+  std::string measure = "rgb";
+  // [cost.zncc_window_px]: side of the "zncc" window, in pixels. Range: odd, 3 … 21.
+  int zncc_window_px = 7;
   // [cost.aggregation]: how the per-neighbour costs of a pixel and label are combined.
   //   "mean"   — mean over the neighbours that see the sample (the paper);
   //   "best_k" — mean of the best_k smallest of them (occlusion-robust; Kang, Szeliski & Chai
@@ -70,7 +81,10 @@ struct PlaneSweepSummary {
 //     t = R_nᵀ (C_ref − C_n) (Strecha convention, R camera-to-world) maps reference pixels on the
 //     plane to neighbour n's pixels; along a reference row it is x' = (a + b·col)/(c + d·col);
 //   - I_n(·) is sampled bilinearly (RGB, grey levels 0…255); ‖·‖₂ is the Euclidean norm of the RGB
-//     difference (the paper), truncated at τ = options.truncation;
+//     difference (the paper), truncated at τ = options.truncation; or, with options.measure
+//     "zncc", τ · min(1, 1 − ρ) with ρ the windowed ZNCC of the grey levels (see
+//     PlaneSweepOptions::measure; the window samples the neighbour at H_{n,l} q for every q of
+//     the window, the border replicated; window sums are exact integers, so tiles still agree);
 //   - V(p, l): the neighbours whose image contains the projection (Camera::InImage: within half a
 //     pixel of the border, sampled with edge replication) and that see the plane in front of them;
 //     the others do not vote;
