@@ -219,25 +219,40 @@ TEST(PlaneSweep, SameBytesForAnyThreadCount) {
   EXPECT_EQ(0, std::memcmp(parallel.PixelData(0, 0), serial.PixelData(0, 0), n * 2));
 }
 
-// Rectified sequence with disparity labels: the sweep must equal a direct shift x − k·d.
-TEST(PlaneSweep, RectifiedSequenceEqualsDirectShift) {
-  const int width = 40, height = 7;
-  std::mt19937 rng(7);
+// A rectified sequence of random-colour images (focal 100 px, baseline 0.2 per view step): the
+// reference at index 2 and the neighbours at `indices`, drawn in that order from `seed`.
+constexpr double kSequenceFocal = 100.0;
+constexpr double kSequenceBaseline = 0.2;
+struct RandomSequence {
+  View reference;
+  std::vector<View> neighbors;
+};
+RandomSequence MakeRandomSequence(int width, int height, unsigned seed,
+                                  const std::vector<int>& indices) {
+  std::mt19937 rng(seed);
   std::uniform_int_distribution<int> value(0, 255);
-  auto random_image = [&]() {
+  auto view = [&](int index) {
     cv::Mat image(height, width, CV_8UC3);
     for (int r = 0; r < height; ++r)
       for (int c = 0; c < width; ++c)
         image.at<cv::Vec3b>(r, c) = cv::Vec3b(value(rng), value(rng), value(rng));
-    return image;
+    return View{"v" + std::to_string(index), image,
+                RectifiedSequenceCamera(kSequenceFocal, (width - 1) / 2.0, (height - 1) / 2.0,
+                                        kSequenceBaseline, index, width, height)};
   };
-  const double focal = 100.0, baseline = 0.2;
-  auto view = [&](int index) {
-    return View{"v" + std::to_string(index), random_image(),
-                RectifiedSequenceCamera(focal, 19.5, 3.0, baseline, index, width, height)};
-  };
-  const View reference = view(2);
-  const std::vector<View> neighbors = {view(3), view(1), view(4)};
+  RandomSequence out;
+  out.reference = view(2);
+  for (const int index : indices) out.neighbors.push_back(view(index));
+  return out;
+}
+
+// Rectified sequence with disparity labels: the sweep must equal a direct shift x − k·d.
+TEST(PlaneSweep, RectifiedSequenceEqualsDirectShift) {
+  const int width = 40, height = 7;
+  const RandomSequence sequence = MakeRandomSequence(width, height, 7, {3, 1, 4});
+  const View& reference = sequence.reference;
+  const std::vector<View>& neighbors = sequence.neighbors;
+  const double focal = kSequenceFocal, baseline = kSequenceBaseline;
   // Disparity per view step: numerator = focal · baseline.
   const LabelSpace labels(LabelSpaceKind::kDisparity, 6, 0.0, 5.0, focal * baseline);
   PlaneSweepOptions options;
@@ -415,22 +430,10 @@ TEST(PlaneSweep, BadInputsAreReported) {
 // replicated, the neighbour sampled at the clamped shifted column, ε = 4 grey levels² per sample.
 TEST(PlaneSweepZncc, EqualsDirectZncc) {
   const int width = 40, height = 12, window = 5;
-  std::mt19937 rng(11);
-  std::uniform_int_distribution<int> value(0, 255);
-  auto random_image = [&]() {
-    cv::Mat image(height, width, CV_8UC3);
-    for (int r = 0; r < height; ++r)
-      for (int c = 0; c < width; ++c)
-        image.at<cv::Vec3b>(r, c) = cv::Vec3b(value(rng), value(rng), value(rng));
-    return image;
-  };
-  const double focal = 100.0, baseline = 0.2;
-  auto view = [&](int index) {
-    return View{"v" + std::to_string(index), random_image(),
-                RectifiedSequenceCamera(focal, 19.5, 5.5, baseline, index, width, height)};
-  };
-  const View reference = view(2);
-  const std::vector<View> neighbors = {view(3), view(1)};
+  const RandomSequence sequence = MakeRandomSequence(width, height, 11, {3, 1});
+  const View& reference = sequence.reference;
+  const std::vector<View>& neighbors = sequence.neighbors;
+  const double focal = kSequenceFocal, baseline = kSequenceBaseline;
   const LabelSpace labels(LabelSpaceKind::kDisparity, 4, 0.0, 3.0, focal * baseline);
   PlaneSweepOptions options;
   options.measure = "zncc";
