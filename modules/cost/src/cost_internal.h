@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "gcpstereo/core/cost_volume.h"
 
@@ -25,5 +26,12 @@ inline std::uint16_t Quantise(float cost, float inv_step) {
   if (!(q > 0.0f)) return 0;
   return q >= 65534.0f ? std::uint16_t{65534} : static_cast<std::uint16_t>(q);
 }
+
+// The best_k aggregation of the plane sweep (RGB and ZNCC): per_neighbor holds the costs of
+// `width` entries for each neighbour ([neighbour][entry], +inf = the neighbour does not see it) and
+// is sorted in place per entry; out[i] = the mean of the min(k, votes[i]) smallest, 0 without
+// votes.
+void MeanOfBestK(std::vector<float>& per_neighbor, int num_neighbors, int width, int k,
+                 const float* votes, float* out);
 
 }  // namespace gcpstereo::cost::internal

@@ -50,6 +50,35 @@ void PlaneSweepOptions::Check() const {
   window.Check("cost.sweep_");
 }
 
+namespace internal {
+
+// (cost_internal.h) Sorts the per-neighbour costs of every column ascending (+inf = no vote
+// sorts last) with an odd–even transposition network over the neighbour arrays (min/max per
+// column vectorise), then averages the first min(k, votes) of them.
+void MeanOfBestK(std::vector<float>& per_neighbor, int num_neighbors, int width, int k,
+                 const float* votes, float* out) {
+  for (int pass = 0; pass < num_neighbors; ++pass) {
+    for (int n = pass % 2; n + 1 < num_neighbors; n += 2) {
+      float* a = &per_neighbor[static_cast<std::size_t>(n) * width];
+      float* b = a + width;
+      for (int c = 0; c < width; ++c) {
+        const float lo = std::min(a[c], b[c]);
+        const float hi = std::max(a[c], b[c]);
+        a[c] = lo;
+        b[c] = hi;
+      }
+    }
+  }
+  for (int c = 0; c < width; ++c) {
+    const int m = std::min(k, static_cast<int>(votes[c]));
+    float sum = 0.0f;
+    for (int i = 0; i < m; ++i) sum += per_neighbor[static_cast<std::size_t>(i) * width + c];
+    out[c] = m > 0 ? sum / static_cast<float>(m) : 0.0f;
+  }
+}
+
+}  // namespace internal
+
 namespace {
 
 constexpr float kInfinityCost = std::numeric_limits<float>::infinity();
@@ -112,31 +141,6 @@ struct RowScratch {
   std::vector<float> per_neighbor;   // best_k: [neighbour][col], +inf = no vote
   std::vector<std::uint16_t> block;  // [label in block][col]
 };
-
-// best_k: sorts the per-neighbour costs of every column ascending (+inf = no vote sorts last) with
-// an odd–even transposition network over the neighbour arrays (min/max per column vectorise), then
-// averages the first min(k, votes) of them.
-void MeanOfBestK(std::vector<float>& per_neighbor, int num_neighbors, int width, int k,
-                 const float* votes, float* out) {
-  for (int pass = 0; pass < num_neighbors; ++pass) {
-    for (int n = pass % 2; n + 1 < num_neighbors; n += 2) {
-      float* a = &per_neighbor[static_cast<std::size_t>(n) * width];
-      float* b = a + width;
-      for (int c = 0; c < width; ++c) {
-        const float lo = std::min(a[c], b[c]);
-        const float hi = std::max(a[c], b[c]);
-        a[c] = lo;
-        b[c] = hi;
-      }
-    }
-  }
-  for (int c = 0; c < width; ++c) {
-    const int m = std::min(k, static_cast<int>(votes[c]));
-    float sum = 0.0f;
-    for (int i = 0; i < m; ++i) sum += per_neighbor[static_cast<std::size_t>(i) * width + c];
-    out[c] = m > 0 ? sum / static_cast<float>(m) : 0.0f;
-  }
-}
 
 // What every region of one sweep shares: the neighbour images (packed RGB, or grey for "zncc")
 // and the homographies H_{n,l} (index l · neighbours + n).
@@ -285,7 +289,8 @@ CostVolume PlaneSweepPixelCost(const SweepContext& context, const View& referenc
           }
         }
         if (best_k) {
-          MeanOfBestK(s.per_neighbor, num_neighbors, width, k, s.votes.data(), s.sum.data());
+          internal::MeanOfBestK(s.per_neighbor, num_neighbors, width, k, s.votes.data(),
+                                s.sum.data());
         } else {
           for (int c = 0; c < width; ++c) {
             s.sum[c] = s.votes[c] > 0.0f ? s.sum[c] / s.votes[c] : 0.0f;

@@ -190,24 +190,13 @@ CostVolume ZnccSweep(const cv::Mat& reference_bgr, const std::vector<GreyImage>&
         }
       }
     }
+    if (params.best_k) {
+      MeanOfBestK(s.per_neighbor, num_neighbors, area, params.k, s.votes.data(), s.sum.data());
+    }
     std::int64_t no_data = 0;
-    std::vector<float> best(static_cast<std::size_t>(num_neighbors));
     for (std::size_t i = 0; i < static_cast<std::size_t>(area); ++i) {
       const bool has_data = s.votes[i] >= min_votes;
-      float value = 0.0f;
-      if (has_data && params.best_k) {
-        int m = 0;
-        for (int nb = 0; nb < num_neighbors; ++nb) {
-          const float c = s.per_neighbor[static_cast<std::size_t>(nb) * area + i];
-          if (c < kNoVote) best[m++] = c;
-        }
-        const int k = std::min(params.k, m);
-        std::partial_sort(best.begin(), best.begin() + k, best.begin() + m);
-        for (int j = 0; j < k; ++j) value += best[j];
-        value /= static_cast<float>(k);
-      } else if (has_data) {
-        value = s.sum[i] / s.votes[i];
-      }
+      const float value = params.best_k ? s.sum[i] : (has_data ? s.sum[i] / s.votes[i] : 0.0f);
       no_data += has_data ? 0 : 1;
       encoded[i] = has_data ? Quantise(value, inv_step) : CostVolume::kNoData;
     }
