@@ -34,6 +34,47 @@ struct GreyImage {
 };
 GreyImage MakeGreyImage(const cv::Mat& bgr);
 
+// The two inner loops of the ZNCC sweep, each in a portable scalar version and an AVX2 version
+// (x86-64, chosen at run time with HaveAvx2Kernel(), sweep_kernels.h) that perform the same IEEE
+// operations in the same order, so the costs do not depend on the CPU.
+//
+// WarpRow: the neighbour's grey level at H (x, y) for x = first_col + c, c < count, as in the RGB
+// sweep (sweep_kernels.h: w = aw + bw·x, inv_w = 1/w, u = (ax + bx·x)·inv_w, v = (ay + by·x)·inv_w,
+// float arithmetic, no fused multiply-add), sampled bilinearly at u' = min(max(u, 0), width − 1),
+// v' likewise (the border replicated; 0 where w <= 0), and stored in units of 1/kZnccScale
+// (nearest): values[c] = q = int(value·kZnccScale + ½), squares[c] = q², products[c] =
+// reference[c]·q, inside[c] = 1 where w > 0 and −½ <= u < width − ½ and −½ <= v < height − ½.
+struct WarpRow {
+  float ax, ay, aw, bx, by, bw;
+  int first_col;
+  int count;
+  const std::int32_t* reference;  // the reference row's grey levels ·kZnccScale, `count`
+};
+void WarpRowScalar(const GreyImage& image, const WarpRow& row, std::int32_t* values,
+                   std::int32_t* squares, std::int32_t* products, std::uint8_t* inside);
+void WarpRowAvx2(const GreyImage& image, const WarpRow& row, std::int32_t* values,
+                 std::int32_t* squares, std::int32_t* products, std::uint8_t* inside);
+
+// ZnccRow: one row of costs from the window sums of the warped values (Σq, Σq², Σr·q) and of the
+// reference (Σr and var_r = n·Σr² − (Σr)² + ε'), in double: var = n·Σq² − Σq·Σq + ε', cov = n·Σrq −
+// Σr·Σq, ρ = cov / √(var_r·var), cost = τ·float(min(max(1 − ρ, 0), 1)). Where inside[c]: votes[c]
+// += 1 and either sum[c] += cost (sum non-null) or costs[c] = cost; elsewhere costs[c] = +inf (costs
+// non-null). Returns the number of inside columns.
+struct ZnccRow {
+  const std::int32_t* sums;
+  const std::int32_t* square_sums;
+  const std::int32_t* product_sums;
+  const double* ref_sum;
+  const double* ref_var;
+  const std::uint8_t* inside;
+  int count;
+  double n;      // pixels in the window
+  double floor;  // ε' = n²·kZnccScale²·kZnccVarianceFloor
+  float truncation;
+};
+std::int64_t ZnccRowScalar(const ZnccRow& row, float* sum, float* votes, float* costs);
+std::int64_t ZnccRowAvx2(const ZnccRow& row, float* sum, float* votes, float* costs);
+
 struct ZnccSweepParams {
   int window_px = 7;      // odd, 3 … kMaxZnccWindowPx
   float truncation = 60;  // τ: Φ_n = τ · min(1, 1 − ρ)
