@@ -333,6 +333,30 @@ double Bad1(const nlohmann::json& report, const char* mask) {
   return report["metrics"]["middlebury"]["result"][mask]["bad_percent"][1].get<double>();
 }
 
+// configs/strecha.yaml runs a Strecha-layout scene it was not written for with nothing set but
+// the folder and the view (and the scale: the tiny scene's 160 px would be 80 px at the config's
+// 0.5): the label range, the neighbours and the GCPs come from the data, and the report says so.
+TEST_F(TinyScene, StrechaConfigRunsAnotherSceneUnattended) {
+  const nlohmann::json report = RunShippedConfig(
+      "strecha.yaml", *dir_ + "/strecha",
+      {"dataset.path=" + *dir_ + "/data", "dataset.reference=0005", "dataset.scale=1"}, {});
+  EXPECT_EQ(report["labels"]["range_source"], "gcps+matching");  // not "config"
+  const auto& neighbors = report["dataset"]["neighbor_selection"]["neighbors"];
+  ASSERT_GE(neighbors.size(), 2u);
+  EXPECT_LE(neighbors.size(), 6u);
+  for (const auto& name : neighbors) EXPECT_NE(name.get<std::string>(), "0005");
+  EXPECT_EQ(report["gcps"]["sources"][0]["source"], "stereo");
+  EXPECT_GT(report["gcps"]["count"].get<int>(), 0);
+  // The truth (the tiny scene spans ≈ 5–12 m) lies inside the automatic range.
+  EXPECT_LT(report["labels"]["min"].get<double>(), 5.0);
+  EXPECT_GT(report["labels"]["max"].get<double>(), 11.0);
+  // The stereo result improves on its own sparse prior D̂.
+  const auto& metrics = report["metrics"]["depth_sigma"];
+  EXPECT_GT(metrics["result"]["within_n_sigma_percent"][2].get<double>(),
+            metrics["propagated"]["within_n_sigma_percent"][2].get<double>());
+  EXPECT_TRUE(fs::exists(*dir_ + "/strecha/depth.pfm"));
+}
+
 // labels.min/max/count omitted on a rectified pair with stereo GCPs: the pair's matched
 // disparities (OpenCV's semi-global matcher over every disparity below the width) bound the
 // stereo GCPs' search and, with the GCPs, the labels: one per pixel from 0 up. The matches alone
