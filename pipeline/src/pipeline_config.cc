@@ -287,6 +287,10 @@ void PipelineConfig::Register(config::Schema* s) {
           "(exposure-invariant), cost τ·min(1, 1 − ρ)"});
   s->Add("cost.zncc_window_px", &cost.plane_sweep.zncc_window_px, Range::Between(3, 21),
          {"plane sweep: side of the zncc window, odd", "px"});
+  s->Add("cost.zncc_flat_fallback", &cost.plane_sweep.zncc_flat_fallback,
+         {"plane sweep, zncc: in a flat reference window, where a correlation sees nothing, the "
+          "cost moves to the difference of the window means (truncated at τ/√3 grey levels): "
+          "Φ = τ·[(1 − w)·min(1, 1 − ρ) + w·min(1, |Δμ|√3/τ)], w = ε/(σ² + ε), ε = 4 grey²"});
   s->Add("cost.aggregation", &cost.plane_sweep.aggregation, {"mean", "best_k"},
          {"plane sweep: mean over the neighbours (paper) or mean of the best k (occlusions)"});
   s->Add("cost.best_k", &cost.plane_sweep.best_k, Range::AtLeast(1),

@@ -428,7 +428,9 @@ TEST(PlaneSweep, BadInputsAreReported) {
 // cost.sweep_measure: zncc against a brute-force ZNCC on a rectified sequence with integer
 // disparities (the warp is then an exact shift): window sums in double, the reference's border
 // replicated, the neighbour sampled at the clamped shifted column, ε = 4 grey levels² per sample.
-TEST(PlaneSweepZncc, EqualsDirectZncc) {
+// The sweep's costs against ZNCC computed directly from the definition (plane_sweep.h), with or
+// without the flat-window fallback.
+void ExpectEqualsDirectZncc(bool flat_fallback) {
   const int width = 40, height = 12, window = 5;
   const RandomSequence sequence = MakeRandomSequence(width, height, 11, {3, 1});
   const View& reference = sequence.reference;
@@ -438,6 +440,7 @@ TEST(PlaneSweepZncc, EqualsDirectZncc) {
   PlaneSweepOptions options;
   options.measure = "zncc";
   options.zncc_window_px = window;
+  options.zncc_flat_fallback = flat_fallback;
   const CostVolume volume =
       ComputePlaneSweepCost(reference, neighbors, labels, cv::Rect(0, 0, width, height), options);
   auto grey = [](const cv::Mat& bgr) {
@@ -472,7 +475,14 @@ TEST(PlaneSweepZncc, EqualsDirectZncc) {
           const double var_r = srr / n - (sr / n) * (sr / n);
           const double var_n = snn / n - (sn / n) * (sn / n);
           const double rho = (srn / n - (sr / n) * (sn / n)) / std::sqrt((var_r + 4) * (var_n + 4));
-          sum += options.truncation * std::min(1.0, std::max(0.0, 1.0 - rho));
+          double t = std::min(1.0, std::max(0.0, 1.0 - rho));
+          if (flat_fallback) {
+            const double w = 4.0 / (var_r + 4.0);
+            const double mean_difference = std::abs(sr - sn) / n;
+            t = (1.0 - w) * t + w * std::min(1.0, mean_difference * std::sqrt(3.0) /
+                                                       options.truncation);
+          }
+          sum += options.truncation * t;
           ++voters;
         }
         if (voters == 0) {
@@ -488,6 +498,9 @@ TEST(PlaneSweepZncc, EqualsDirectZncc) {
   }
   EXPECT_GT(checked, width * height * 3);
 }
+
+TEST(PlaneSweepZncc, EqualsDirectZncc) { ExpectEqualsDirectZncc(false); }
+TEST(PlaneSweepZncc, FlatFallbackEqualsItsDefinition) { ExpectEqualsDirectZncc(true); }
 
 // The neighbours photographed with other exposures (gain and offset per view): the RGB norm reads
 // the change as mismatch, ZNCC does not see it.

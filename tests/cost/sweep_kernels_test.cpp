@@ -5,6 +5,7 @@
 
 #include "zncc_sweep.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -150,11 +151,13 @@ TEST(ZnccKernels, CostScalarAndAvx2AreBitIdentical) {
   std::vector<std::uint8_t> inside(count);
   for (int c = 0; c < count; ++c) {
     std::int64_t s = 0, ss = 0, rs = 0, rss = 0, rq = 0;
-    const bool flat = c % 9 == 0;  // below the variance floor
+    const bool flat = c % 9 == 0;  // both windows flat (below the variance floor), other means
     const std::int32_t base = level(rng);
+    const std::int32_t other_base = level(rng);
     for (int k = 0; k < window * window; ++k) {
       const std::int32_t q = flat ? base : level(rng);
-      const std::int32_t r = c % 4 == 0 ? q : level(rng);  // some windows correlate exactly
+      // Some windows correlate exactly.
+      const std::int32_t r = flat ? other_base : (c % 4 == 0 ? q : level(rng));
       s += q;
       ss += static_cast<std::int64_t>(q) * q;
       rs += r;
@@ -170,11 +173,24 @@ TEST(ZnccKernels, CostScalarAndAvx2AreBitIdentical) {
   }
   inside[8] = inside[9] = inside[10] = inside[11] = inside[12] = inside[13] = inside[14] =
       inside[15] = 0;  // one block of eight without a vote
-  ZnccRow row{sums.data(),    square_sums.data(), product_sums.data(), ref_sum.data(),
-              ref_var.data(), inside.data(),      count,               n,
-              floor,          60.0f};
-  for (int mode = 0; mode < 2; ++mode) {
-    const bool store = mode == 1;
+  std::vector<double> ref_flat(count);
+  for (int c = 0; c < count; ++c) ref_flat[c] = floor / ref_var[c];
+  ZnccRow row;
+  row.sums = sums.data();
+  row.square_sums = square_sums.data();
+  row.product_sums = product_sums.data();
+  row.ref_sum = ref_sum.data();
+  row.ref_var = ref_var.data();
+  row.inside = inside.data();
+  row.count = count;
+  row.n = n;
+  row.floor = floor;
+  row.truncation = 60.0f;
+  row.mean_scale = 1.0 / (n * kZnccScale * 34.6);
+  // Modes: accumulate, store; then both with the flat-window fallback.
+  for (int mode = 0; mode < 4; ++mode) {
+    const bool store = mode % 2 == 1;
+    row.ref_flat = mode >= 2 ? ref_flat.data() : nullptr;
     std::vector<float> sum_a(count, 2.5f), votes_a(count, 1.0f), costs_a(count, -1.0f);
     auto sum_b = sum_a, votes_b = votes_a, costs_b = costs_a;
     const auto na = ZnccRowScalar(row, store ? nullptr : sum_a.data(), votes_a.data(),
@@ -185,11 +201,11 @@ TEST(ZnccKernels, CostScalarAndAvx2AreBitIdentical) {
     ASSERT_EQ(0, std::memcmp(sum_a.data(), sum_b.data(), count * sizeof(float)));
     ASSERT_EQ(0, std::memcmp(votes_a.data(), votes_b.data(), count * sizeof(float)));
     ASSERT_EQ(0, std::memcmp(costs_a.data(), costs_b.data(), count * sizeof(float)));
-    if (store) {
+    if (store && row.ref_flat == nullptr) {
       for (int c = 0; c < count; ++c) {
         if (!inside[c]) {
           EXPECT_TRUE(std::isinf(costs_a[c])) << c;
-        } else if (c % 4 == 0) {
+        } else if (c % 4 == 0 && c % 9 != 0) {
           // Identical windows: cov = var', so ρ = var' / (var' + ε') (1 − ρ ≈ 7e-4 for random
           // windows; exactly 0 for a flat one, whose cost is then τ).
           const double var = n * square_sums[c] - static_cast<double>(sums[c]) * sums[c];
@@ -198,6 +214,25 @@ TEST(ZnccKernels, CostScalarAndAvx2AreBitIdentical) {
           EXPECT_GT(costs_a[c], 0.0f) << c;
           EXPECT_LE(costs_a[c], 60.0f) << c;
         }
+      }
+    }
+    if (store && row.ref_flat != nullptr) {
+      // (1 − w)·ZNCC + w·|Δμ|/T; in a flat reference window (w = 1) the mean difference alone.
+      for (int c = 0; c < count; ++c) {
+        if (!inside[c]) continue;
+        const double delta = std::abs(ref_sum[c] - sums[c]) / (n * kZnccScale);
+        const double w = ref_flat[c];
+        if (c % 9 == 0) {
+          EXPECT_EQ(w, 1.0) << c;
+          EXPECT_NEAR(costs_a[c], 60.0 * std::min(1.0, delta / 34.6), 1e-4) << c;
+        } else {
+          EXPECT_LT(w, 0.01) << c;
+        }
+        const double var = n * square_sums[c] - static_cast<double>(sums[c]) * sums[c];
+        const double cov = n * product_sums[c] - ref_sum[c] * sums[c];
+        const double t = std::clamp(1.0 - cov / std::sqrt(ref_var[c] * (var + floor)), 0.0, 1.0);
+        const double expected = 60.0 * ((1.0 - w) * t + w * std::min(1.0, delta / 34.6));
+        EXPECT_NEAR(costs_a[c], expected, 1e-4) << c;
       }
     }
   }

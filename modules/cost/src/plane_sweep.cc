@@ -213,6 +213,9 @@ CostVolume PlaneSweepPixelCost(const SweepContext& context, const View& referenc
     params.best_k = options.aggregation == "best_k";
     params.k = std::min(options.best_k, static_cast<int>(context.grey_images.size()));
     params.min_voters = options.min_voters;
+    if (options.zncc_flat_fallback) {
+      params.flat_truncation = static_cast<float>(options.truncation / std::sqrt(3.0));
+    }
     internal::ZnccSweepCounts counts;
     CostVolume volume =
         internal::ZnccSweep(reference.image, context.grey_images, context.homographies, num_labels,

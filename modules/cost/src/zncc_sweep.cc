@@ -89,6 +89,12 @@ std::int64_t ZnccColumns(const ZnccRow& row, int begin, int end, float* sum, flo
     double t = 1.0 - rho;
     t = t > 0.0 ? t : 0.0;
     t = t < 1.0 ? t : 1.0;
+    if (row.ref_flat != nullptr) {
+      const double w = row.ref_flat[c];
+      double m = std::abs(row.ref_sum[c] - sn) * row.mean_scale;
+      m = m < 1.0 ? m : 1.0;
+      t = (1.0 - w) * t + w * m;
+    }
     const float cost = row.truncation * static_cast<float>(t);
     if (!row.inside[c]) {
       if (costs != nullptr) costs[c] = kNoVote;
@@ -136,9 +142,15 @@ __attribute__((target("avx2"), always_inline)) inline __m128 OneMinusRho4(const 
       _mm256_sub_pd(_mm256_mul_pd(n, srn), _mm256_mul_pd(_mm256_loadu_pd(row.ref_sum + c), sn));
   const __m256d rho =
       _mm256_div_pd(cov, _mm256_sqrt_pd(_mm256_mul_pd(_mm256_loadu_pd(row.ref_var + c), var)));
-  const __m256d t = _mm256_min_pd(
-      _mm256_max_pd(_mm256_sub_pd(_mm256_set1_pd(1.0), rho), _mm256_setzero_pd()),
-      _mm256_set1_pd(1.0));
+  const __m256d one = _mm256_set1_pd(1.0);
+  __m256d t = _mm256_min_pd(_mm256_max_pd(_mm256_sub_pd(one, rho), _mm256_setzero_pd()), one);
+  if (row.ref_flat != nullptr) {
+    const __m256d w = _mm256_loadu_pd(row.ref_flat + c);
+    const __m256d difference = _mm256_sub_pd(_mm256_loadu_pd(row.ref_sum + c), sn);
+    const __m256d magnitude = _mm256_andnot_pd(_mm256_set1_pd(-0.0), difference);
+    const __m256d m = _mm256_min_pd(_mm256_mul_pd(magnitude, _mm256_set1_pd(row.mean_scale)), one);
+    t = _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(one, w), t), _mm256_mul_pd(w, m));
+  }
   return _mm256_cvtpd_ps(t);
 }
 
@@ -316,12 +328,15 @@ CostVolume ZnccSweep(const cv::Mat& reference_bgr, const std::vector<GreyImage>&
   WindowSums(ref_value_squares(local), params.window_px, &ref_square_sums);
   std::vector<double> ref_sum(static_cast<std::size_t>(area));
   std::vector<double> ref_var(static_cast<std::size_t>(area));  // var' + ε
+  const bool flat_fallback = params.flat_truncation > 0.0f;
+  std::vector<double> ref_flat(flat_fallback ? static_cast<std::size_t>(area) : 0);  // ε' / var
   for (int r = 0; r < region.height; ++r) {
     for (int c = 0; c < region.width; ++c) {
       const double s = ref_sums.at<std::int32_t>(r, c);
       const std::size_t i = static_cast<std::size_t>(r) * region.width + c;
       ref_sum[i] = s;
       ref_var[i] = n * ref_square_sums.at<std::int32_t>(r, c) - s * s + floor;
+      if (flat_fallback) ref_flat[i] = floor / ref_var[i];
     }
   }
 
@@ -345,6 +360,8 @@ CostVolume ZnccSweep(const cv::Mat& reference_bgr, const std::vector<GreyImage>&
     row.n = n;
     row.floor = floor;
     row.truncation = truncation;
+    row.ref_flat = nullptr;
+    row.mean_scale = flat_fallback ? 1.0 / (n * kZnccScale * params.flat_truncation) : 0.0;
     for (int y0 = 0; y0 < region.height; y0 += kStripRows) {
       const int y1 = std::min(region.height, y0 + kStripRows);
       // The strip's rows of `outer` with the window's reach (outer-local, clipped to `outer`).
@@ -389,6 +406,7 @@ CostVolume ZnccSweep(const cv::Mat& reference_bgr, const std::vector<GreyImage>&
           row.product_sums = window_product_sums.ptr<std::int32_t>(r - y0);
           row.ref_sum = &ref_sum[i];
           row.ref_var = &ref_var[i];
+          row.ref_flat = flat_fallback ? &ref_flat[i] : nullptr;
           row.inside =
               &s.inside[static_cast<std::size_t>(local.y + r - lo) * outer.width + local.x];
           votes += (avx2 ? ZnccRowAvx2 : ZnccRowScalar)(

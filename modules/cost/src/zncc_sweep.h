@@ -60,12 +60,16 @@ void WarpRowAvx2(const GreyImage& image, const WarpRow& row, std::int32_t* value
 // Σr·Σq, ρ = cov / √(var_r·var), cost = τ·float(min(max(1 − ρ, 0), 1)). Where inside[c]: votes[c]
 // += 1 and either sum[c] += cost (sum non-null) or costs[c] = cost; elsewhere costs[c] = +inf (costs
 // non-null). Returns the number of inside columns.
+// With ref_flat (flat-window fallback): t = (1 − w)·t + w·min(1, |Σr − Σq|·mean_scale), w =
+// ref_flat[c] = ε'/var_r (≈ 1 in a flat reference window, ≈ 0 in a textured one), before τ·float(t).
 struct ZnccRow {
   const std::int32_t* sums;
   const std::int32_t* square_sums;
   const std::int32_t* product_sums;
   const double* ref_sum;
   const double* ref_var;
+  const double* ref_flat;  // nullptr: no fallback
+  double mean_scale;       // 1 / (n · kZnccScale · T), T the mean difference that costs τ
   const std::uint8_t* inside;
   int count;
   double n;      // pixels in the window
@@ -82,6 +86,9 @@ struct ZnccSweepParams {
   int k = 3;              // already ≤ the number of neighbours
   int min_voters = 1;
   int progress_labels = 8;  // labels between two progress reports
+  // Flat-window fallback: where the reference window is flat the cost moves to the difference of
+  // the window means, truncated at flat_truncation grey levels; 0 = off (pure ZNCC).
+  float flat_truncation = 0.0f;
 };
 
 struct ZnccSweepCounts {

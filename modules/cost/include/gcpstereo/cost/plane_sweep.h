@@ -37,6 +37,14 @@ struct PlaneSweepOptions {
   std::string measure = "rgb";
   // [cost.zncc_window_px]: side of the "zncc" window, in pixels. Range: odd, 3 … 21.
   int zncc_window_px = 7;
+  // [cost.zncc_flat_fallback]: "zncc" only. A flat reference window correlates with nothing, so
+  // every label costs the same there and the smoothness alone decides; with the fallback the cost
+  // moves, as the window flattens, to the difference of the grey-level means of the two windows:
+  // Φ_n = τ · [(1 − w) · min(1, 1 − ρ) + w · min(1, |μ_ref − μ_n| / (τ/√3))], w = ε / (σ_ref² +
+  // ε) with ε the variance floor (4 grey levels²), so w ≈ 1 below σ ≈ 2 grey levels and ≈ 0 in
+  // texture; τ/√3 is the grey difference at which the RGB norm reaches τ. Not exposure-invariant
+  // where it acts (flat windows only).
+  bool zncc_flat_fallback = false;
   // [cost.aggregation]: how the per-neighbour costs of a pixel and label are combined.
   //   "mean"   — mean over the neighbours that see the sample (the paper);
   //   "best_k" — mean of the best_k smallest of them (occlusion-robust; Kang, Szeliski & Chai
