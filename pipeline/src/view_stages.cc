@@ -93,6 +93,13 @@ std::string CheckDatasetServesOptions(const PipelineConfig& options, const Datas
         "optimizer.left_right_gcp_radius_px and left_right_median_radius_px act on the left-right "
         "check's fill: without optimizer.left_right_check they have no effect");
   }
+  if (cost_method == "plane_sweep" && options.cost.plane_sweep.measure != "zncc" &&
+      options.cost.plane_sweep.zncc_flat_fallback) {
+    spdlog::warn(
+        "cost.zncc_flat_fallback acts on the zncc sweep only: with cost.sweep_measure = {} it has "
+        "no effect",
+        options.cost.plane_sweep.measure);
+  }
   return cost_method;
 }
 

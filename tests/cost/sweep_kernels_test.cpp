@@ -99,8 +99,8 @@ TEST(ZnccKernels, WarpScalarAndAvx2AreBitIdentical) {
     // As the RGB kernel's test: some planes behind the camera (w <= 0), samples partly outside
     // (left, right, above, below: the clamped border taps), and one row through w = 0 exactly.
     row.bw = trial % 29 == 0 ? 0.05f : 0.01f * coef(rng);
-    row.aw = trial % 29 == 0 ? -0.05f * 7.0f
-                             : 1.0f + 0.5f * coef(rng) - (trial % 17 == 0 ? 2.0f : 0.0f);
+    row.aw =
+        trial % 29 == 0 ? -0.05f * 7.0f : 1.0f + 0.5f * coef(rng) - (trial % 17 == 0 ? 2.0f : 0.0f);
     row.bx = 0.9f + 0.2f * coef(rng);
     row.ax = 40.0f * coef(rng) - 5.0f;
     row.by = 0.05f * coef(rng);

@@ -5,11 +5,6 @@
 #include <cmath>
 #include <limits>
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define GCPSTEREO_COST_AVX2 1
-#include <immintrin.h>
-#endif
-
 namespace gcpstereo::cost::internal {
 namespace {
 
@@ -72,7 +67,7 @@ std::int64_t SweepRowScalar(const PackedImage& image, const SweepRow& row, float
   return SweepColumns(image, row, 0, row.count, sum, votes, costs);
 }
 
-#if GCPSTEREO_COST_AVX2
+#if GCPSTEREO_AVX2_KERNELS
 
 bool HaveAvx2Kernel() {
   static const bool have = __builtin_cpu_supports("avx2");

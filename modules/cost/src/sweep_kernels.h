@@ -6,6 +6,15 @@
 
 #include <cstdint>
 
+// The AVX2 kernels are compiled on x86-64 with GCC or Clang (per function, with the target
+// attribute) and chosen at run time (HaveAvx2Kernel); elsewhere only the scalar ones exist.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define GCPSTEREO_AVX2_KERNELS 1
+#include <immintrin.h>
+#else
+#define GCPSTEREO_AVX2_KERNELS 0
+#endif
+
 namespace gcpstereo::cost::internal {
 
 // A neighbour image packed as 0x00RRGGBB per pixel (uint8 channels) with one replicated column on

@@ -14,11 +14,6 @@
 #include "gcpstereo/cost/cost_filter.h"
 #include "sweep_kernels.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define GCPSTEREO_ZNCC_AVX2 1
-#include <immintrin.h>
-#endif
-
 namespace gcpstereo::cost::internal {
 
 GreyImage MakeGreyImage(const cv::Mat& bgr) {
@@ -122,7 +117,7 @@ std::int64_t ZnccRowScalar(const ZnccRow& row, float* sum, float* votes, float* 
   return ZnccColumns(row, 0, row.count, sum, votes, costs);
 }
 
-#if GCPSTEREO_ZNCC_AVX2
+#if GCPSTEREO_AVX2_KERNELS
 
 namespace {
 
@@ -183,11 +178,11 @@ __attribute__((target("avx2"))) void WarpRowAvx2(const GreyImage& image, const W
     const __m256 u = _mm256_mul_ps(_mm256_add_ps(ax, _mm256_mul_ps(bx, x)), inv_w);
     const __m256 v = _mm256_mul_ps(_mm256_add_ps(ay, _mm256_mul_ps(by, x)), inv_w);
     const __m256 front = _mm256_cmp_ps(w, zero, _CMP_GT_OQ);
-    const __m256 in = _mm256_and_ps(
-        front, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(u, minus_half, _CMP_GE_OQ),
-                                           _mm256_cmp_ps(u, max_u, _CMP_LT_OQ)),
-                             _mm256_and_ps(_mm256_cmp_ps(v, minus_half, _CMP_GE_OQ),
-                                           _mm256_cmp_ps(v, max_v, _CMP_LT_OQ))));
+    const __m256 in =
+        _mm256_and_ps(front, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(u, minus_half, _CMP_GE_OQ),
+                                                         _mm256_cmp_ps(u, max_u, _CMP_LT_OQ)),
+                                           _mm256_and_ps(_mm256_cmp_ps(v, minus_half, _CMP_GE_OQ),
+                                                         _mm256_cmp_ps(v, max_v, _CMP_LT_OQ))));
     const __m256 uc = _mm256_and_ps(_mm256_min_ps(_mm256_max_ps(u, zero), last_col), front);
     const __m256 vc = _mm256_and_ps(_mm256_min_ps(_mm256_max_ps(v, zero), last_row), front);
     const __m256i iu = _mm256_cvttps_epi32(uc);
@@ -241,7 +236,8 @@ __attribute__((target("avx2"))) std::int64_t ZnccRowAvx2(const ZnccRow& row, flo
       if (costs != nullptr) _mm256_storeu_ps(costs + c, infinity);
       continue;
     }
-    const __m256 cost = _mm256_mul_ps(truncation, _mm256_set_m128(OneMinusRho4(row, c + 4), OneMinusRho4(row, c)));
+    const __m256 cost =
+        _mm256_mul_ps(truncation, _mm256_set_m128(OneMinusRho4(row, c + 4), OneMinusRho4(row, c)));
     count += __builtin_popcount(static_cast<unsigned>(bits));
     if (costs != nullptr) {
       _mm256_storeu_ps(costs + c, _mm256_blendv_ps(infinity, cost, in));
@@ -409,9 +405,9 @@ CostVolume ZnccSweep(const cv::Mat& reference_bgr, const std::vector<GreyImage>&
           row.ref_flat = flat_fallback ? &ref_flat[i] : nullptr;
           row.inside =
               &s.inside[static_cast<std::size_t>(local.y + r - lo) * outer.width + local.x];
-          votes += (avx2 ? ZnccRowAvx2 : ZnccRowScalar)(
-              row, params.best_k ? nullptr : &s.sum[i], &s.votes[i],
-              costs != nullptr ? costs + i : nullptr);
+          votes += (avx2 ? ZnccRowAvx2 : ZnccRowScalar)(row, params.best_k ? nullptr : &s.sum[i],
+                                                        &s.votes[i],
+                                                        costs != nullptr ? costs + i : nullptr);
         }
       }
     }
