@@ -245,6 +245,8 @@ json TilesJson(const optimize::TiledResult& optimized) {
          {"converged", e.converged},
          {"moves_tried", e.moves_tried},
          {"moves_skipped", e.moves_skipped},
+         {"mean_candidates_per_block", e.mean_candidates_per_block},
+         {"unconfident_pixels", e.unconfident_pixels},
          {"refinement",
           {{"method", optimize::RefinementMethodName(tile.refinement.method)},
            {"pixels_moved", tile.refinement.pixels_moved},

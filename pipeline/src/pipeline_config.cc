@@ -464,6 +464,13 @@ void PipelineConfig::Register(config::Schema* s) {
          {"labels within this many steps of a voted label are candidates", "label steps"});
   s->Add("optimizer.candidate_min_votes", &optimizer.expansion.candidate_min_votes,
          Range::AtLeast(1), {"WTA votes that make a label a candidate"});
+  s->Add("optimizer.candidate_min_confidence", &optimizer.expansion.candidate_min_confidence,
+         Range::HalfOpen(0.0, 1.0),
+         {"pixels whose cost-curve peak ratio is below this neither vote for candidate labels nor "
+          "start from their own WTA label (they start from D̂, else the nearest confident "
+          "pixel's label): flat costs such as sky stop making every label a candidate; 0 = off"});
+  s->Add("optimizer.candidate_confidence_radius", &optimizer.expansion.candidate_confidence_radius,
+         Range::Between(0, 10), {"window radius of that confidence", "px"});
   s->Add("optimizer.skip_unchanged_labels", &optimizer.expansion.skip_unchanged_labels,
          {"skip α-moves that cannot find a different cut (exact)"});
   s->Add("optimizer.prune_pixels", &optimizer.expansion.prune_pixels,

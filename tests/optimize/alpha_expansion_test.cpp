@@ -2,6 +2,7 @@
 #include "gcpstereo/optimize/alpha_expansion.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -258,6 +259,50 @@ TEST(AlphaExpansion, RetryingChangedBlocksOnlyStaysCloseToPlainExpansion) {
   EXPECT_LT(b.graph_nodes, a.graph_nodes);
 }
 
+// A "sky" over a textured scene: in the top rows every label costs about the same — a pixel's
+// curve is noise over a faint lean towards label 30 — so their WTA labels are noise and, with the
+// default options, nearly every label becomes a candidate there. With candidate_min_confidence
+// those pixels vote for and start from their block's summed-cost label: fewer candidates and graph
+// nodes, the same energy within the budget of the other approximations, and the sky on the
+// label its summed data prefer.
+TEST(AlphaExpansion, UnconfidentPixelsVoteForTheirBlocksLabel) {
+  const int width = 64, height = 64, num_labels = 40, sky_rows = 32, lean_label = 30;
+  testing::SceneProblem scene = MakeScene(width, height, num_labels, 31);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> noise(0.0f, 1.0f);
+  for (int row = 0; row < sky_rows; ++row) {
+    for (int col = 0; col < width; ++col) {
+      for (int l = 0; l < num_labels; ++l) {
+        const float lean = 0.02f * std::abs(l - lean_label);
+        scene.problem.data.SetCost(row, col, l, 50.0f + lean + noise(rng));
+      }
+      scene.problem.image.at<cv::Vec3b>(row, col) = cv::Vec3b(230, 200, 150);
+    }
+  }
+  const MrfProblem problem = scene.problem.View();
+  ExpansionOptions off;
+  off.candidate_block_px = 8;
+  off.convergence_tolerance = 0.0;
+  ExpansionOptions on = off;
+  on.candidate_min_confidence = 0.1;
+  const ExpansionResult a = AlphaExpansion(problem, EnergyOptions(), off);
+  const ExpansionResult b = AlphaExpansion(problem, EnergyOptions(), on);
+  EXPECT_EQ(a.unconfident_pixels, 0);
+  // The sky and hardly anything else is unconfident.
+  EXPECT_GE(b.unconfident_pixels, width * sky_rows * 9 / 10);
+  EXPECT_LE(b.unconfident_pixels, width * sky_rows + width * height / 20);
+  EXPECT_LT(b.mean_candidates_per_block, a.mean_candidates_per_block)
+      << a.mean_candidates_per_block << " vs " << b.mean_candidates_per_block;
+  EXPECT_LT(b.graph_nodes, a.graph_nodes);
+  EXPECT_LE(b.breakdown.total(), 1.005 * a.breakdown.total()) << a.Summary() << "\n" << b.Summary();
+  const cv::Mat sky = b.labels.rowRange(0, sky_rows - 2);
+  // One label over the sky, within a step of the lean (the noise moves the summed minimum).
+  double lo = 0.0, hi = 0.0;
+  cv::minMaxLoc(sky, &lo, &hi);
+  EXPECT_EQ(lo, hi);
+  EXPECT_LE(std::abs(lo - lean_label), 1.0);
+}
+
 TEST(AlphaExpansion, DeterministicAndStartsFromGivenLabels) {
   const testing::SceneProblem scene = MakeScene(30, 20, 10, 8);
   const MrfProblem problem = scene.problem.View();
@@ -319,6 +364,15 @@ TEST(AlphaExpansion, RejectsBadInput) {
     EXPECT_STREQ(e.what(), "optimizer.max_cycles = 0. Violated constraint: >= 1");
   }
   EXPECT_THROW(ParseCandidateLabels("some"), ConfigError);
+  options = ExpansionOptions();
+  options.candidate_min_confidence = 1.0;
+  try {
+    AlphaExpansion(owned.View(), EnergyOptions(), options);
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(),
+                 "optimizer.candidate_min_confidence = 1. Violated constraint: in [0, 1)");
+  }
 }
 
 TEST(AlphaExpansion, ProgressCanCancel) {

@@ -9,9 +9,11 @@
 
 #include <maxflow.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/system.h"
+#include "gcpstereo/cost/winner_take_all.h"
 
 namespace gcpstereo::optimize {
 namespace {
@@ -504,6 +506,56 @@ std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, co
   return blocks_of_label;
 }
 
+// ExpansionOptions::candidate_min_confidence: every pixel whose data confidence is below it
+// votes for, and starts from, its block's label — the least summed cost over the block's
+// unconfident pixels — instead of its own WTA label (it keeps a prior start of
+// Initialization::kPrior). A flat-looking curve still leans, summed over many pixels (the sky
+// matches best far away), and one label per block leaves the block's candidates few. *votes gets
+// the votes. Returns how many pixels are unconfident; nothing changes when none or all are.
+long long StartUnconfidentPixels(const MrfProblem& problem, const ExpansionOptions& options,
+                                 const cv::Mat& wta, int blocks_x, int blocks_y, cv::Mat* labels,
+                                 cv::Mat* votes) {
+  const CostVolume& data = *problem.data;
+  const cv::Mat confidence = cost::PeakRatioConfidence(data, options.candidate_confidence_radius);
+  const cv::Mat unconfident = confidence < options.candidate_min_confidence;  // 255 where below
+  const long long count = cv::countNonZero(unconfident);
+  if (count == 0 || count == static_cast<long long>(unconfident.total())) return 0;
+  const int num_labels = problem.num_labels(), block = options.candidate_block_px;
+  // Summed stored costs (no data counts as the largest cost), per block and label.
+  std::vector<std::uint64_t> sums(static_cast<std::size_t>(blocks_x) * blocks_y * num_labels, 0);
+  for (int row = 0; row < problem.height(); ++row) {
+    const uchar* u = unconfident.ptr<uchar>(row);
+    for (int col = 0; col < problem.width(); ++col) {
+      if (u[col] == 0) continue;
+      const std::uint16_t* costs = data.PixelData(row, col);
+      std::uint64_t* sum =
+          &sums[static_cast<std::size_t>((row / block) * blocks_x + col / block) * num_labels];
+      for (int l = 0; l < num_labels; ++l) {
+        sum[l] += costs[l] == CostVolume::kNoData ? CostVolume::kNoData - 1 : costs[l];
+      }
+    }
+  }
+  std::vector<int> label_of_block(static_cast<std::size_t>(blocks_x) * blocks_y, 0);
+  for (std::size_t b = 0; b < label_of_block.size(); ++b) {
+    const std::uint64_t* sum = &sums[b * num_labels];
+    label_of_block[b] = static_cast<int>(std::min_element(sum, sum + num_labels) - sum);
+  }
+  const bool keep_prior =
+      options.initialization == Initialization::kPrior && !problem.prior.empty();
+  *votes = wta.clone();
+  for (int row = 0; row < problem.height(); ++row) {
+    for (int col = 0; col < problem.width(); ++col) {
+      if (unconfident.ptr<uchar>(row)[col] == 0) continue;
+      const int l = label_of_block[(row / block) * blocks_x + col / block];
+      votes->ptr<int>(row)[col] = l;
+      if (!(keep_prior && std::isfinite(problem.prior.ptr<float>(row)[col]))) {
+        labels->ptr<int>(row)[col] = l;
+      }
+    }
+  }
+  return count;
+}
+
 }  // namespace
 
 const char* CandidateLabelsName(CandidateLabels mode) {
@@ -537,6 +589,15 @@ void ExpansionOptions::Check() const {
   if (candidate_min_votes < 1) {
     throw ConfigError(ViolatedConstraint("optimizer.candidate_min_votes",
                                          std::to_string(candidate_min_votes), ">= 1"));
+  }
+  if (!(candidate_min_confidence >= 0.0 && candidate_min_confidence < 1.0)) {
+    throw ConfigError(ViolatedConstraint("optimizer.candidate_min_confidence",
+                                         FormatNumber(candidate_min_confidence), "in [0, 1)"));
+  }
+  if (candidate_confidence_radius < 0 || candidate_confidence_radius > cost::kMaxConfidenceRadius) {
+    throw ConfigError(ViolatedConstraint(
+        "optimizer.candidate_confidence_radius", std::to_string(candidate_confidence_radius),
+        "in [0, " + std::to_string(cost::kMaxConfidenceRadius) + "]"));
   }
   if (num_threads < 0) {
     throw ConfigError(
@@ -591,11 +652,16 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
 
   ExpansionResult result;
   ExpansionSolver solver(problem, energy_options, options.candidate_block_px, options.prune_pixels);
+  cv::Mat votes = wta;
+  if (initial_labels.empty() && options.candidate_min_confidence > 0.0) {
+    result.unconfident_pixels = StartUnconfidentPixels(problem, options, wta, solver.blocks_x(),
+                                                       solver.blocks_y(), &labels, &votes);
+  }
   solver.SetLabels(labels);
   std::vector<std::vector<int>> blocks_of_label;
   if (options.candidate_labels == CandidateLabels::kLocal) {
     blocks_of_label =
-        LocalCandidateBlocks(problem, wta, labels, options, energy_options, solver.blocks_x(),
+        LocalCandidateBlocks(problem, votes, labels, options, energy_options, solver.blocks_x(),
                              solver.blocks_y(), &result.mean_candidates_per_block);
   } else {
     result.mean_candidates_per_block = num_labels;

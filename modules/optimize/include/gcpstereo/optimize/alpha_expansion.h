@@ -46,6 +46,21 @@ struct ExpansionOptions {
   // Minimum WTA votes (pixels in the 3×3 block neighbourhood) to make a label a candidate.
   // YAML optimizer.candidate_min_votes. Range: >= 1.
   int candidate_min_votes = 3;
+  // Pixels whose data confidence c_p (cost::PeakRatioConfidence of their cost curves averaged over
+  // the (2·candidate_confidence_radius+1)² window) is below this vote for, and start from, their
+  // block's label — the least cost summed over the block's unconfident pixels — instead of their
+  // own winner-take-all label (a prior start of Initialization::kPrior is kept). Where the cost
+  // curve is nearly flat (sky, a blank wall) the WTA label is noise, yet summed over many pixels
+  // the curves still lean (the sky matches best far away); each noise label made a candidate of
+  // its block, so that nearly every label was tried there (issue 20: the sky tiles of the
+  // synthetic fountain). Only when AlphaExpansion starts from its own labelling (no initial labels
+  // given). 0 = off. An approximation otherwise (it changes the start and the candidate sets;
+  // energy and accuracy measured in the README). YAML optimizer.candidate_min_confidence.
+  // Range: [0, 1).
+  double candidate_min_confidence = 0.0;
+  // Window radius of that confidence, px. YAML optimizer.candidate_confidence_radius.
+  // Range: [0, cost::kMaxConfidenceRadius].
+  int candidate_confidence_radius = 2;
   // Exact shortcut: skip the α-move when no label inside α's region (or next to it) changed
   // since α was last tried (the move would find the same cut again). YAML
   // optimizer.skip_unchanged_labels.
@@ -89,6 +104,7 @@ struct ExpansionResult {
   long long moves_accepted = 0;      // moves that lowered the energy
   long long graph_nodes = 0;         // total nodes over all max-flow problems
   long long pixels_pruned = 0;       // candidate pixels left out by prune_pixels (total)
+  long long unconfident_pixels = 0;  // pixels below candidate_min_confidence (0 when off)
   double max_energy_mismatch = 0.0;  // max |graph energy − ComputeEnergy| (when verified)
   double mean_candidates_per_block = 0.0;
   double time_seconds = 0.0;
