@@ -9,7 +9,6 @@
 
 #include <maxflow.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/system.h"
