@@ -442,7 +442,9 @@ TEST(AlignMeasure, ColmapModelOfSyntheticFountain) {
   double sum = 0.0;
   for (size_t i = 0; i < centres.size(); ++i) {
     const double d = (s.Apply(centres[i]) - true_centres[i]).norm();
-    if (accepted) EXPECT_LE(d, options.max_residual) << names[i] << ": accepted, yet off";
+    if (accepted) {
+      EXPECT_LE(d, options.max_residual) << names[i] << ": accepted, yet off";
+    }
     const double angle = Similarity{
         1.0,
         (s.rotation * rotations[i]) * true_rotations[i].transpose(),

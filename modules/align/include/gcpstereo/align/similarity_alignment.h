@@ -6,16 +6,17 @@
 //     convention): RANSAC over minimal samples of three, the best consensus refitted on its
 //     inliers (locally optimised), or
 //   - by registering the model's 3D points to a scan: coarse hypotheses from the two clouds'
-//     centroids, principal axes and spreads, each refined by a short trimmed, scale-aware ICP
-//     (nearest neighbours from PCL's k-d tree, Eigen::umeyama with scale), the best refined to
-//     convergence against the whole scan, last by point-to-plane steps with scale (Chen &
-//     Medioni, "Object modelling by registration of multiple range images", 1992), which do not
-//     stall along planes as point-to-point ICP does.
-//     The fine stage is then restarted from a fixed set of perturbed poses (rotations about, and
-//     shifts along, the aligned model's principal axes, and scale changes); the best-scoring
-//     restart wins, and the spread of those that score about as well as it (the camera centres'
-//     largest displacement between them) measures how well the scan pins the model down: a model
-//     that can slide or turn along a wall without a worse fit is ambiguous.
+//     centroids, principal axes and spreads, and from rotations drawn uniformly, refined by a
+//     trimmed, scale-aware ICP (nearest neighbours from PCL's k-d tree, Eigen::umeyama with
+//     scale) with successive halving (all a few steps, the best quarter more, and so on), the
+//     best few refined to convergence against the whole scan, last by point-to-plane steps with
+//     scale (Chen & Medioni, "Object modelling by registration of multiple range images", 1992),
+//     which do not stall along planes as point-to-point ICP does. The fine stage is then restarted
+//     from a fixed set of perturbed poses (rotations about, and shifts along, the aligned model's
+//     principal axes, and scale changes); the best-scoring restart wins, and the spread of those
+//     that score about as well as it (the camera centres' largest displacement between them)
+//     measures how well the scan pins the model down: a model that can slide or turn along a wall
+//     without a worse fit is ambiguous.
 // Neither decides alone whether the result is good enough: CheckAlignment refuses a poor or an
 // ambiguous one with its residuals (a wrong frame must never pass silently).
 #pragma once
