@@ -347,6 +347,17 @@ Similarity IcpStep(const std::vector<Eigen::Vector3d>& model, const ScanIndex& s
   return IsValid(next) ? next : s;
 }
 
+// How far one ICP step moved `from` to `to`: the relative scale change, plus the rotation's change
+// (Frobenius norm), plus the translation's relative to the aligned model's size (`size`: the
+// model's spread in model units). The iterations stop when it falls below their tolerance.
+double StepChange(const Similarity& from, const Similarity& to, double size) {
+  return std::abs(to.scale / from.scale - 1.0) + (to.rotation - from.rotation).norm() +
+         (to.translation - from.translation).norm() / (to.scale * size);
+}
+
+// Orders hypotheses (anything with a `score`) best first.
+constexpr auto kByScore = [](const auto& a, const auto& b) { return a.score < b.score; };
+
 struct Moments {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // principal axes, ascending variance
@@ -659,7 +670,7 @@ AlignmentResult AlignToScan(const std::vector<Eigen::Vector3d>& model_points,
   if (!(model_moments.variance > 0.0) || !(scan_moments.variance > 0.0)) {
     throw Error("alignment to the scan: the model's or the scan's points all coincide");
   }
-  const double model_size = std::sqrt(model_moments.variance);
+  const double size = std::sqrt(model_moments.variance);  // the model's spread
   // A hypothesis refined by up to `steps` coarse ICP steps (fewer once it stops moving) and
   // scored by its median residual relative to the model's size there.
   struct Hypothesis {
@@ -669,20 +680,16 @@ AlignmentResult AlignToScan(const std::vector<Eigen::Vector3d>& model_points,
   auto advance = [&](Hypothesis* h, int steps) {
     for (int i = 0; i < steps; ++i) {
       const Similarity next = IcpStep(coarse_model, coarse_scan, h->s, kCoarseKeep, 0.0);
-      const double change =
-          std::abs(next.scale / h->s.scale - 1.0) + (next.rotation - h->s.rotation).norm() +
-          (next.translation - h->s.translation).norm() / (next.scale * model_size);
+      const double change = StepChange(h->s, next, size);
       h->s = next;
       if (change < kCoarseTolerance) break;
     }
-    h->score =
-        Quantile(ScanResiduals(coarse_model, coarse_scan, h->s), 0.5) / (h->s.scale * model_size);
+    h->score = Quantile(ScanResiduals(coarse_model, coarse_scan, h->s), 0.5) / (h->s.scale * size);
   };
   auto keep_best = [](std::vector<Hypothesis>* hs) {
     const size_t keep = std::max<size_t>(
         1, static_cast<size_t>(std::ceil(kCoarseKeepShare * static_cast<double>(hs->size()))));
-    std::stable_sort(hs->begin(), hs->end(),
-                     [](const Hypothesis& a, const Hypothesis& b) { return a.score < b.score; });
+    std::stable_sort(hs->begin(), hs->end(), kByScore);
     hs->resize(std::min(keep, hs->size()));
   };
   Similarity best;
@@ -746,14 +753,11 @@ AlignmentResult AlignToScan(const std::vector<Eigen::Vector3d>& model_points,
   const ScanIndex full_scan(full);
   Similarity s = best;
   int iterations = 0;
-  const double size = model_size;
   auto refine = [&](const std::vector<Eigen::Vector3d>& points, double tolerance,
                     int max_iterations = kMaxFineIterations) {
     for (int i = 0; i < max_iterations; ++i, ++iterations) {
       const Similarity next = IcpStep(points, full_scan, s, kFineKeep, options.max_residual);
-      const double change = std::abs(next.scale / s.scale - 1.0) +
-                            (next.rotation - s.rotation).norm() +
-                            (next.translation - s.translation).norm() / (next.scale * size);
+      const double change = StepChange(s, next, size);
       s = next;
       if (change < tolerance) break;
     }
@@ -762,8 +766,7 @@ AlignmentResult AlignToScan(const std::vector<Eigen::Vector3d>& model_points,
   // when it starts there: it is started again from the coarse result's scale times 0.9, 0.95,
   // 1.05 and 1.1 on the subset, and the start with the least relative median residual is kept.
   // The same for each of the best kFineCandidates distinct coarse results.
-  std::stable_sort(finalists.begin(), finalists.end(),
-                   [](const Hypothesis& a, const Hypothesis& b) { return a.score < b.score; });
+  std::stable_sort(finalists.begin(), finalists.end(), kByScore);
   std::vector<Similarity> candidates;
   for (const Hypothesis& h : finalists) {
     if (static_cast<int>(candidates.size()) == kFineCandidates) break;
@@ -799,9 +802,7 @@ AlignmentResult AlignToScan(const std::vector<Eigen::Vector3d>& model_points,
   auto plane_steps = [&](const std::vector<Eigen::Vector3d>& points) {
     for (int i = 0; i < kPlaneIterations; ++i, ++iterations) {
       const Similarity next = PlaneStep(points, full_scan, s, options.max_residual);
-      const double change = std::abs(next.scale / s.scale - 1.0) +
-                            (next.rotation - s.rotation).norm() +
-                            (next.translation - s.translation).norm() / (next.scale * size);
+      const double change = StepChange(s, next, size);
       s = next;
       if (change < 1e-10) break;
     }
