@@ -18,6 +18,7 @@
 #include "gcpstereo/cost/winner_take_all.h"
 #include "gcpstereo/gcp/gcp_sources.h"
 #include "gcpstereo/optimize/left_right.h"
+#include "stages.h"
 #include "view_stages.h"
 
 namespace gcpstereo::pipeline::internal {
@@ -169,18 +170,26 @@ ViewSolver ViewSolverOf(const PipelineConfig& options, cv::Size size, bool use_g
   return solver;
 }
 
+// A tile's share of the GCP energy's prior and its weights ρ_p (either may be empty).
+void CropPrior(const EnergyPrior* prior, const cv::Rect& region,
+               optimize::OwnedMrfProblem* problem) {
+  if (prior == nullptr) return;
+  if (!prior->prior.empty()) problem->prior = prior->prior(region).clone();
+  if (!prior->weight.empty()) problem->prior_weight = prior->weight(region).clone();
+}
+
 // The tile problem of a rectified pair seen from `left` (Birchfield–Tomasi against `right`) with
 // `prior` as the GCP energy's prior (none when null). `prior` is read when a tile is built, so it
 // may be filled in after this call; it and `disparities` must outlive the problem.
 optimize::MakeTileProblem PairTileProblem(const cv::Mat& left, const cv::Mat& right,
                                           const std::vector<double>& disparities,
                                           const cost::BirchfieldTomasiOptions& options,
-                                          const cv::Mat* prior) {
+                                          const EnergyPrior* prior) {
   return [left, right, &disparities, &options, prior](const cv::Rect& region) {
     optimize::OwnedMrfProblem problem;
     problem.data = cost::ComputeBirchfieldTomasiCost(left, right, disparities, region, options);
     problem.image = left(region).clone();
-    if (prior != nullptr) problem.prior = (*prior)(region).clone();
+    CropPrior(prior, region, &problem);
     return problem;
   };
 }
@@ -188,13 +197,13 @@ optimize::MakeTileProblem PairTileProblem(const cv::Mat& left, const cv::Mat& ri
 // The tile problem of the plane sweep over every neighbour; as above for `prior`.
 optimize::MakeTileProblem PlaneSweepTileProblem(const Dataset& dataset, const LabelSpace& labels,
                                                 const cost::PlaneSweepOptions& options,
-                                                const cv::Mat* prior) {
+                                                const EnergyPrior* prior) {
   return [&dataset, &labels, &options, prior](const cv::Rect& region) {
     optimize::OwnedMrfProblem problem;
     problem.data =
         cost::ComputePlaneSweepCost(dataset.reference, dataset.neighbors, labels, region, options);
     problem.image = dataset.reference.image(region).clone();
-    if (prior != nullptr) problem.prior = (*prior)(region).clone();
+    CropPrior(prior, region, &problem);
     return problem;
   };
 }
@@ -206,15 +215,16 @@ PartnerSolve SolveMirroredPartner(const OptimizeInputs& in, ViewSolver solver,
                                   cv::Mat mirrored_reference, cv::Mat mirrored_neighbor) {
   Timer timer;
   const PipelineConfig& options = in.options;
-  cv::Mat mirrored_prior;
+  EnergyPrior mirrored_prior;
   if (solver.energy.use_gcp_energy) {
     std::vector<cv::Point> mirrored_gcp_pixels;
     const cv::Mat sparse =
         MirroredPartnerGcpLabels(in.gcps, in.labels, in.dataset.reference.camera,
                                  in.pair.neighbor->camera, options.gcp.lidar, &mirrored_gcp_pixels);
-    mirrored_prior = EnergyPriorOf(
+    mirrored_prior.prior = EnergyPriorOf(
         options, PropagateLabels(mirrored_reference, sparse, in.labels, options.propagation).values,
         mirrored_gcp_pixels, mirrored_reference, in.prior.segmentation);
+    mirrored_prior.weight = optimize::SpreadPriorWeights(sparse, mirrored_reference, solver.energy);
   }
   const optimize::MakeTileProblem make_problem = PairTileProblem(
       mirrored_reference, mirrored_neighbor, in.pair.disparities, options.cost.birchfield_tomasi,
@@ -303,7 +313,8 @@ cv::Mat RenderPlaneFit(const cv::Mat& image_bgr, const cv::Mat& segments, const 
 }  // namespace
 
 EnergyPrior EnergyPriorStage(const PipelineConfig& options, const View& reference,
-                             const GcpSet& gcps, const cv::Mat& propagated) {
+                             const GcpSet& gcps, const LabelSpace& labels,
+                             const cv::Mat& propagated) {
   EnergyPrior result;
   std::vector<cv::Point> gcp_pixels;
   for (const Gcp& g : gcps.points) gcp_pixels.emplace_back(g.col, g.row);
@@ -317,6 +328,15 @@ EnergyPrior EnergyPriorStage(const PipelineConfig& options, const View& referenc
   result.pixels_percent =
       propagated.empty() ? 0.0
                          : 100.0 * cv::countNonZero(result.prior == result.prior) / size.area();
+  if (!propagated.empty() && options.optimizer.energy.gcp_spread > 0.0) {
+    result.weight = optimize::SpreadPriorWeights(SparseGcpLabels(gcps, labels, size),
+                                                 reference.image, options.optimizer.energy);
+    const cv::Mat acts = result.prior == result.prior;
+    if (cv::countNonZero(acts) > 0) result.weight_mean = cv::mean(result.weight, acts)[0];
+    spdlog::info(
+        "GCP weights from the GCPs' spread (τ {} labels): mean {:.3f} where the prior acts",
+        options.optimizer.energy.gcp_spread, result.weight_mean);
+  }
   if (!propagated.empty() &&
       (options.optimizer.prior_radius_px > 0.0 || result.segmentation.has_value())) {
     spdlog::info("GCP energy on {:.1f} % of the pixels (within {} px of a GCP{})",
@@ -324,6 +344,23 @@ EnergyPrior EnergyPriorStage(const PipelineConfig& options, const View& referenc
                  result.segmentation ? ", in colour segments holding one" : "");
   }
   return result;
+}
+
+cv::Mat GcpWeightPreview(const EnergyPrior& prior, const cv::Mat& image_bgr) {
+  if (prior.weight.empty() || prior.prior.empty()) return {};
+  cv::Mat picture;
+  cv::cvtColor(image_bgr, picture, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(picture * 0.3, picture, cv::COLOR_GRAY2BGR);  // no prior: the image, dimmed
+  for (int r = 0; r < picture.rows; ++r) {
+    const float* value = prior.prior.ptr<float>(r);
+    const float* weight = prior.weight.ptr<float>(r);
+    for (int c = 0; c < picture.cols; ++c) {
+      if (!std::isfinite(value[c])) continue;
+      const auto grey = cv::saturate_cast<std::uint8_t>(255.0f * weight[c]);
+      picture.at<cv::Vec3b>(r, c) = cv::Vec3b(grey, grey, grey);
+    }
+  }
+  return picture;
 }
 
 PairLabels PairLabelsOf(const Dataset& dataset, const LabelSpace& labels,
@@ -344,7 +381,7 @@ OptimizeResult OptimizeStage(const OptimizeInputs& in) {
   const View& reference = in.dataset.reference;
   const bool use_gcp_energy = options.optimizer.energy.use_gcp_energy && !in.gcps.empty();
   const ViewSolver solver = ViewSolverOf(options, reference.image.size(), use_gcp_energy);
-  const cv::Mat* prior = use_gcp_energy ? &in.prior.prior : nullptr;
+  const EnergyPrior* prior = use_gcp_energy ? &in.prior : nullptr;
   const optimize::MakeTileProblem make_problem =
       in.cost_method == "birchfield_tomasi"
           ? PairTileProblem(reference.image, in.pair.neighbor->image, in.pair.disparities,
@@ -367,6 +404,7 @@ OptimizeResult OptimizeStage(const OptimizeInputs& in) {
       {"cost_method", in.cost_method},
       {"gcp_energy", use_gcp_energy},
       {"gcp_energy_pixels_percent", use_gcp_energy ? in.prior.pixels_percent : 0.0},
+      {"gcp_spread_weight_mean", in.prior.weight_mean},
       {"tiles", TilesJson(result.optimized)},
       {"energy_sum", result.optimized.energy_sum}};
   return result;

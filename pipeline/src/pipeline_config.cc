@@ -391,6 +391,26 @@ void PipelineConfig::Register(config::Schema* s) {
          {"radius of the window whose averaged costs give the data confidence of "
           "optimizer.gcp_confidence (0 = the pixel's own cost curve)",
           "px"});
+  s->Add("optimizer.gcp_spread", &optimizer.energy.gcp_spread, Range::AtLeast(0.0),
+         {"τ of eq. 10: how the GCPs' spread about a local plane (σ_p, the weighted RMS residual "
+          "of the plane through the GCPs around the pixel, of its colour) lowers its GCP weight: "
+          "λr·ρ_p, ρ_p = 1/(1 + σ_p²/τ²), so the prior yields where the GCPs disagree; 0 = the "
+          "paper's one λr for every pixel",
+          "label steps", "τ"});
+  s->Add("optimizer.gcp_spread_sigma_px", &optimizer.energy.gcp_spread_sigma_px,
+         Range::Between(1.0, 50.0),
+         {"σw of eq. 10: the Gaussian window over which optimizer.gcp_spread fits the plane "
+          "(it reaches 3σw)",
+          "px"});
+  s->Add("optimizer.gcp_spread_gated", &optimizer.energy.gcp_spread_gated,
+         {"let optimizer.gcp_spread lower the GCP weight only as far as the pixel's data are "
+          "decisive: 1 − c_p·(1 − ρ_p), c_p the data confidence of optimizer.gcp_confidence "
+          "(over optimizer.gcp_confidence_radius); false = ρ_p everywhere"});
+  s->Add("optimizer.gcp_spread_sigma_colour", &optimizer.energy.gcp_spread_sigma_colour,
+         Range::AtLeast(0.0),
+         {"σc of eq. 10: the colour bandwidth of the weights of optimizer.gcp_spread's plane, so "
+          "that it keeps to the pixel's surface as D̂ does (0 = spatial weights only)",
+          "RGB", "σc"});
   s->Add("optimizer.data_weight", &optimizer.energy.data_weight, Range::GreaterThan(0.0),
          {"scale of the matching costs in the energy"});
   s->Add("optimizer.use_gcp_energy", &optimizer.energy.use_gcp_energy,

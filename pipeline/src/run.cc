@@ -208,7 +208,7 @@ OptimizedLabels OptimizeLabels(json& stages, const PipelineConfig& options, cons
                                const LabelSpace& labels, const GcpSet& gcps,
                                const cv::Mat& propagated) {
   const Dataset& dataset = load.dataset;
-  const EnergyPrior prior = EnergyPriorStage(options, dataset.reference, gcps, propagated);
+  const EnergyPrior prior = EnergyPriorStage(options, dataset.reference, gcps, labels, propagated);
   const PairLabels pair = PairLabelsOf(dataset, labels, load.cost_method);
   const OptimizeInputs inputs{options, dataset, load.cost_method, labels, gcps, prior, pair};
   OptimizeResult optimized =
@@ -228,7 +228,8 @@ OptimizedLabels OptimizeLabels(json& stages, const PipelineConfig& options, cons
     });
     result.labels = plane_fit.labels;
   }
-  result.previews = {{"left_right_check.png", left_right.preview},
+  result.previews = {{"gcp_weight.png", GcpWeightPreview(prior, dataset.reference.image)},
+                     {"left_right_check.png", left_right.preview},
                      {"plane_fit.png", plane_fit.preview}};
   return result;
 }

@@ -97,11 +97,18 @@ DepthMaps ToDepthMaps(const cv::Mat& label_map, const LabelSpace& labels, const 
 // and only in the colour segments that hold one (optimizer.prior_segment_k). Untimed.
 struct EnergyPrior {
   cv::Mat prior;                // labels, NaN where the GCP energy does not act; empty without D̂
+  cv::Mat weight;               // ρ_p of eq. (10) (optimizer.gcp_spread > 0), else empty
+  double weight_mean = 1.0;     // mean ρ_p over the pixels where the prior acts
   double pixels_percent = 0.0;  // share of the pixels where it acts
   std::optional<optimize::SegmentationOptions> segmentation;  // prior_segment_k > 0
 };
 EnergyPrior EnergyPriorStage(const PipelineConfig& options, const View& reference,
-                             const GcpSet& gcps, const cv::Mat& propagated);
+                             const GcpSet& gcps, const LabelSpace& labels,
+                             const cv::Mat& propagated);
+
+// gcp_weight.png: ρ_p of eq. (10) in grey (white 1, black 0) where the prior acts, the reference
+// image dimmed elsewhere; empty without the weights.
+cv::Mat GcpWeightPreview(const EnergyPrior& prior, const cv::Mat& image_bgr);
 
 // The rectified pair Birchfield–Tomasi matches (cost method "birchfield_tomasi"; empty
 // otherwise): the neighbour and the pair disparity of each label.

@@ -144,8 +144,9 @@ TiledResult OptimizeTiled(cv::Size image_size, const MakeTileProblem& make_probl
     report.region = region;
     const Timer setup_timer;
     OwnedMrfProblem owned = make_problem(region);
-    if (energy_options.use_gcp_energy && !owned.prior.empty() && owned.prior_weight.empty()) {
-      owned.prior_weight = ConfidencePriorWeights(owned.data, energy_options);
+    if (energy_options.use_gcp_energy && !owned.prior.empty()) {
+      // Eqs. (9)–(10): the data confidence's factors with the caller's spread factors ρ_p.
+      owned.prior_weight = PriorWeights(owned.data, owned.prior_weight, energy_options);
     }
     report.setup_seconds = setup_timer.ElapsedSeconds();
     report_progress(t, 0.3);

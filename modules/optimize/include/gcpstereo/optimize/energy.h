@@ -16,7 +16,8 @@ namespace gcpstereo::optimize {
 //   w_pq     = max(exp(−c_pq / γc), ε),  c_pq = Euclidean distance of p's and q's RGB       (4)
 //   E_gcp    = λr · Σ_{p with a prior} ω_p · Ψ(D_p, D̂_p)                                    (8')
 //   Ψ(x, y)  = −ln((1 − η) · exp(−|x − y| / γd) + η)                                        (7)
-//   ω_p      = 1 − β · c_p   (our extension; β = 0, ω_p = 1: the paper's eq. 8)              (9)
+//   ω_p      = (1 − β · c_p) · ρ'_p  (our extension; β = 0, τ = 0: ω_p = 1, eq. 8)          (9)
+//   ρ'_p     = ρ_p, or 1 − c_p · (1 − ρ_p) when gated;  ρ_p = 1 / (1 + σ_p² / τ²)            (10)
 //
 // Units. D_p is a label INDEX (0 … L−1, integer for the discrete solution, fractional after
 // sub-label refinement), so |D_p − D_q|, T and γd are in LABEL STEPS for every label space. For
@@ -38,7 +39,24 @@ namespace gcpstereo::optimize {
 //    the pixel's data confidence c_p ∈ [0, 1] (cost::PeakRatioConfidence of the pixel's cost
 //    curve: 0 for a flat curve or two equal minima, near 1 for one sharp minimum), by the factor
 //    β (`gcp_confidence`). MrfProblem::prior_weight carries ω_p; OptimizeTiled fills it from the
-//    tile's costs when β > 0.
+//    tile's costs and the caller's ρ_p (PriorWeights).
+//  * Eq. (10), a deliberate extension: D̂_p is only as good as the GCPs around p agree. σ_p is
+//    their spread about one plane, label steps: σ_p² = Σ w_q e_q² / Σ w_q · n / (n − 3), e_q the
+//    residuals of the weighted least-squares plane v = c + a·dx + b·dy through the GCPs q within
+//    3σw of p, w_q = exp(−‖q − p‖² / (2σw²) − ‖I_q − I_p‖² / (2σc²)) (σw =
+//    `gcp_spread_sigma_px`, σc = `gcp_spread_sigma_colour`, RGB; σc = 0: no colour term),
+//    n = (Σw)² / Σw² the window's effective number of GCPs. The colour
+//    term keeps to the pixel's surface as D̂ does, so a depth edge that D̂ follows along a colour
+//    edge does not count; GCPs of one colour that disagree — a wrong match among right ones, a
+//    depth edge with no colour edge under it — do, and ρ_p lowers the prior's weight by the factor
+//    τ (`gcp_spread`, label steps, the spread at which ρ_p = 1/2). Where n ≤ 3 the window cannot
+//    judge a plane and ρ_p = 1: too few GCPs, or a pixel next to one GCP of a sparse set (one
+//    per 16 px, σw 8: within about 5 px of it), whose weight dominates the window — there D̂
+//    is that GCP's own value. (Judging such pixels by the other GCPs instead, with the
+//    leverage-corrected Σ w e² / Σ w (1 − h), was measured worse: README, Benchmarks.)
+//    Gated (`gcp_spread_gated`), the spread lowers the weight only as far as the pixel's own data
+//    are decisive (c_p of eq. 9): where the images cannot decide, a doubtful prior is still the
+//    best information there is.
 // The defaults are the paper's printed numbers. They are not the best everywhere, and the best
 // weights depend on how reliable the GCPs are (tools/benchmark.py; bad-1 nonocc / KITTI held-out
 // bad-3):
@@ -70,13 +88,26 @@ struct EnergyOptions {
   // The window radius over which c_p averages the costs before the peak ratio, px (0 = the
   // pixel's own curve). Range: [0, cost::kMaxConfidenceRadius]. Default 2: a 5×5 window.
   int gcp_confidence_radius = 2;
+  // τ of eq. (10), label steps: the GCPs' spread about a plane at which their prior's weight
+  // halves. 0 = the paper (ρ_p = 1). Range: >= 0.
+  double gcp_spread = 0.0;
+  // σw of eq. (10), px: the Gaussian window of the spread (it reaches 3σw). Range: [1, 50].
+  double gcp_spread_sigma_px = 8.0;
+  // σc of eq. (10), RGB grey levels: the colour bandwidth of the spread's weights; 0 (the
+  // default) = spatial weights only. Range: >= 0.
+  double gcp_spread_sigma_colour = 0.0;
+  // Eq. (10) gated by the data confidence c_p of eq. (9) (over gcp_confidence_radius):
+  // ρ'_p = 1 − c_p·(1 − ρ_p) instead of ρ_p. Only with gcp_spread > 0. Default true: ungated,
+  // the factor lowered the prior where the images are wrong too (KITTI, measured in the README).
+  bool gcp_spread_gated = true;
   // false = the paper's baseline D (E_data + E_smooth only); the prior is then ignored.
   bool use_gcp_energy = true;
 
   // Throws ConfigError naming the YAML key (optimizer.lambda_s, optimizer.truncation,
   // optimizer.gamma_c, optimizer.epsilon, optimizer.lambda_r, optimizer.gamma_d, optimizer.eta,
   // optimizer.data_weight, optimizer.gcp_confidence,
-  // optimizer.gcp_confidence_radius).
+  // optimizer.gcp_confidence_radius, optimizer.gcp_spread, optimizer.gcp_spread_sigma_px,
+  // optimizer.gcp_spread_sigma_colour).
   void Check() const;
 };
 
@@ -122,10 +153,22 @@ double PairWeight(const cv::Vec3b& color_p, const cv::Vec3b& color_q, const Ener
 // Ψ(x, y) of eq. (7) (without λr); x, y in label steps.
 double GcpPenalty(double label, double prior_label, const EnergyOptions& options);
 
-// ω_p of eq. (9) for a problem's costs (CV_32F, region-sized): 1 − β·c_p with c_p
-// cost::PeakRatioConfidence over gcp_confidence_radius; an empty Mat when β = 0 (the paper:
-// ω_p = 1).
-cv::Mat ConfidencePriorWeights(const CostVolume& data, const EnergyOptions& options);
+// ω_p of eq. (9) for one problem's costs (CV_32F, region-sized), from the spread factors ρ_p of
+// eq. (10) for the same region (CV_32F, or empty for none): (1 − β·c_p)·ρ'_p, c_p
+// cost::PeakRatioConfidence over gcp_confidence_radius. Returns `spread_weights` itself when no
+// data confidence is asked for (β = 0 and not gated), so an empty Mat for the paper.
+cv::Mat PriorWeights(const CostVolume& data, const cv::Mat& spread_weights,
+                     const EnergyOptions& options);
+
+// ρ_p of eq. (10) over a whole image from its GCPs (`gcp_labels`: CV_32F, a finite entry is a
+// GCP's label, NaN elsewhere) and the image (CV_8UC3 BGR of the same size; may be empty when
+// gcp_spread_sigma_colour is 0); CV_32F of the same size in (0, 1]. An empty Mat when τ = 0 (the
+// paper: ρ_p = 1). Throws Error for inputs of the wrong type or size.
+cv::Mat SpreadPriorWeights(const cv::Mat& gcp_labels, const cv::Mat& image_bgr,
+                           const EnergyOptions& options);
+// The spread σ_p of eq. (10) itself, label steps (CV_32F; NaN where it cannot judge a plane).
+cv::Mat GcpPlaneSpread(const cv::Mat& gcp_labels, const cv::Mat& image_bgr, double sigma_px,
+                       double sigma_colour);
 
 // The energy (1) of an integer labelling (CV_32S, region-sized, values in [0, L)), computed
 // directly from the definitions above with double sums; independent of the graph-cut code.

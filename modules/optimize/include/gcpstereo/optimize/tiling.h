@@ -63,7 +63,8 @@ inline RefinementOptions NoRefinement() {
 
 // Builds the MRF of one region (a tile with its overlap). Called once per tile, possibly from
 // several threads at once (it must be thread-safe); its result is freed after the tile is solved,
-// so memory follows the tile.
+// so memory follows the tile. Its prior weights (ρ_p of eq. 10, or empty) become ω_p of eq. (9)
+// by PriorWeights.
 using MakeTileProblem = std::function<OwnedMrfProblem(const cv::Rect& region)>;
 
 // Optimises every tile independently with AlphaExpansion (tiles in parallel on up to
