@@ -328,9 +328,12 @@ EnergyPrior EnergyPriorStage(const PipelineConfig& options, const View& referenc
   result.pixels_percent =
       propagated.empty() ? 0.0
                          : 100.0 * cv::countNonZero(result.prior == result.prior) / size.area();
-  if (!propagated.empty() && options.optimizer.energy.gcp_spread > 0.0) {
+  // ρ_p of eq. (10), as for the left-right partner (empty when optimizer.gcp_spread is 0).
+  if (!propagated.empty()) {
     result.weight = optimize::SpreadPriorWeights(SparseGcpLabels(gcps, labels, size),
                                                  reference.image, options.optimizer.energy);
+  }
+  if (!result.weight.empty()) {
     const cv::Mat acts = result.prior == result.prior;
     if (cv::countNonZero(acts) > 0) result.weight_mean = cv::mean(result.weight, acts)[0];
     spdlog::info(

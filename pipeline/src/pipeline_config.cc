@@ -393,9 +393,9 @@ void PipelineConfig::Register(config::Schema* s) {
           "px"});
   s->Add("optimizer.gcp_spread", &optimizer.energy.gcp_spread, Range::AtLeast(0.0),
          {"τ of eq. 10: how the GCPs' spread about a local plane (σ_p, the weighted RMS residual "
-          "of the plane through the GCPs around the pixel, of its colour) lowers its GCP weight: "
-          "λr·ρ_p, ρ_p = 1/(1 + σ_p²/τ²), so the prior yields where the GCPs disagree; 0 = the "
-          "paper's one λr for every pixel",
+          "of the plane through the GCPs around the pixel) lowers its GCP weight: λr·ρ_p, ρ_p = "
+          "1/(1 + σ_p²/τ²), so the prior yields where the GCPs disagree (gated by the data "
+          "confidence: optimizer.gcp_spread_gated); 0 = the paper's one λr for every pixel",
           "label steps", "τ"});
   s->Add("optimizer.gcp_spread_sigma_px", &optimizer.energy.gcp_spread_sigma_px,
          Range::Between(1.0, 50.0),
@@ -409,7 +409,7 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("optimizer.gcp_spread_sigma_colour", &optimizer.energy.gcp_spread_sigma_colour,
          Range::AtLeast(0.0),
          {"σc of eq. 10: the colour bandwidth of the weights of optimizer.gcp_spread's plane, so "
-          "that it keeps to the pixel's surface as D̂ does (0 = spatial weights only)",
+          "that it keeps to the pixel's surface as D̂ does (0, the default = spatial weights only)",
           "RGB", "σc"});
   s->Add("optimizer.data_weight", &optimizer.energy.data_weight, Range::GreaterThan(0.0),
          {"scale of the matching costs in the energy"});
