@@ -44,47 +44,53 @@ cv::Rect GrowRegion(const cv::Rect& region, int margin_px, const cv::Size& image
 namespace {
 
 // Mean of `src` (width × height, row-major) over the (2r+1)² window around each pixel, clipped to
-// the grid. Sequential prefix sums in double: the same input gives the same bits.
+// the grid. Sequential prefix sums in double: the same input gives the same bits. The vertical
+// prefix sums are kept as whole rows (row y + 1 = row y + the window sums of image row y), so that
+// both passes read and write memory in order and vectorise.
 class BoxMean {
  public:
   BoxMean(int width, int height, int radius)
       : width_(width),
         height_(height),
         radius_(radius),
-        rows_(static_cast<std::size_t>(width) * height),
-        prefix_(static_cast<std::size_t>(std::max(width, height)) + 1) {}
+        column_prefix_(static_cast<std::size_t>(width) * (height + 1)),
+        row_prefix_(static_cast<std::size_t>(width) + 1),
+        x_count_(width) {
+    for (int x = 0; x < width_; ++x) {
+      x_count_[x] = std::min(x + radius_, width_ - 1) - std::max(x - radius_, 0) + 1;
+    }
+  }
 
   void operator()(const double* src, double* dst) {
-    // Horizontal window sums into rows_.
+    const std::size_t w = width_;
+    std::fill_n(column_prefix_.begin(), w, 0.0);
     for (int y = 0; y < height_; ++y) {
-      const double* s = src + static_cast<std::size_t>(y) * width_;
-      double* out = &rows_[static_cast<std::size_t>(y) * width_];
-      prefix_[0] = 0.0;
-      for (int x = 0; x < width_; ++x) prefix_[x + 1] = prefix_[x] + s[x];
+      // Horizontal window sums of row y, accumulated onto the prefix row above.
+      const double* s = src + y * w;
+      row_prefix_[0] = 0.0;
+      for (int x = 0; x < width_; ++x) row_prefix_[x + 1] = row_prefix_[x] + s[x];
+      const double* above = &column_prefix_[y * w];
+      double* out = &column_prefix_[(y + 1) * w];
       for (int x = 0; x < width_; ++x) {
         const int lo = std::max(x - radius_, 0), hi = std::min(x + radius_, width_ - 1);
-        out[x] = prefix_[hi + 1] - prefix_[lo];
+        out[x] = row_prefix_[hi + 1] - row_prefix_[lo];
       }
+      for (std::size_t x = 0; x < w; ++x) out[x] += above[x];
     }
     // Vertical window sums, divided by the clipped window's area.
-    for (int x = 0; x < width_; ++x) {
-      const int x_lo = std::max(x - radius_, 0), x_hi = std::min(x + radius_, width_ - 1);
-      const double x_count = x_hi - x_lo + 1;
-      prefix_[0] = 0.0;
-      for (int y = 0; y < height_; ++y) {
-        prefix_[y + 1] = prefix_[y] + rows_[static_cast<std::size_t>(y) * width_ + x];
-      }
-      for (int y = 0; y < height_; ++y) {
-        const int lo = std::max(y - radius_, 0), hi = std::min(y + radius_, height_ - 1);
-        dst[static_cast<std::size_t>(y) * width_ + x] =
-            (prefix_[hi + 1] - prefix_[lo]) / (x_count * (hi - lo + 1));
-      }
+    for (int y = 0; y < height_; ++y) {
+      const int lo = std::max(y - radius_, 0), hi = std::min(y + radius_, height_ - 1);
+      const double y_count = hi - lo + 1;
+      const double* top = &column_prefix_[lo * w];
+      const double* bottom = &column_prefix_[(hi + 1) * w];
+      double* d = dst + y * w;
+      for (std::size_t x = 0; x < w; ++x) d[x] = (bottom[x] - top[x]) / (x_count_[x] * y_count);
     }
   }
 
  private:
   int width_, height_, radius_;
-  std::vector<double> rows_, prefix_;
+  std::vector<double> column_prefix_, row_prefix_, x_count_;
 };
 
 }  // namespace
