@@ -52,7 +52,9 @@ Suites
             SGBM's time on the same pair and the ratio, the issue's targets met or not.
             --repeat N: every timed run N times (median time, largest peak memory);
             --baseline-build DIR: every gcpstereo run also with DIR's program (runs under
-            OUT/runs/speed/baseline/), the tables show after, before and after/before.
+            OUT/runs/speed/baseline/), the tables show after, before and after/before;
+            --baseline-configs DIR: the baseline runs DIR's configuration files (an older
+            commit's configs/) instead of this checkout's.
             Not part of 'all': it times endtoend's runs again, about 10-15 minutes per build and
             repetition on 2 cores (measured with the machine shared: a KITTI frame 26 s, Aloe
             6-13 s, the fountain-P11 view 2.6 min; the synthetic fountain view takes 1.5-7.5 min).
@@ -68,6 +70,8 @@ Example (from the repository root, data in ../shared/data):
   tools/benchmark.py --suite table2 --scenes tsukuba,venus
   tools/benchmark.py --suite scene --scenes synthetic   # the synthetic fountain scene only
   tools/benchmark.py --suite speed --baseline-build ../old/build --repeat 3
+  tools/benchmark.py --suite speed --scenes kitti --baseline-build ../old/build \
+      --baseline-configs ../old/configs      # a shipped configuration's change, timed
 """
 
 import argparse
@@ -274,10 +278,12 @@ def fmt_seconds(s):
 
 
 class Runner:
-    def __init__(self, args, build=None):
-        """Runs the programs of `build` (default: --build) with the data, output folder, --reuse
-        and --timeout of `args`."""
+    def __init__(self, args, build=None, configs=None):
+        """Runs the programs of `build` (default: --build) on the configuration files in `configs`
+        (default: this checkout's configs/) with the data, output folder, --reuse and --timeout of
+        `args`."""
         self.build = os.path.abspath(build or args.build)
+        self.configs = os.path.abspath(configs) if configs else os.path.join(REPO, "configs")
         self.data = os.path.abspath(args.data)
         self.out = os.path.abspath(args.out)
         self.reuse = args.reuse
@@ -339,8 +345,7 @@ class Runner:
     def run(self, key, config, sets):
         """gcpstereo run CONFIG -o OUT/runs/KEY --set ...; returns (report dict, run folder)."""
         folder = os.path.join(self.runs, key)
-        command = [self.gcpstereo, "run", os.path.join(REPO, "configs", config), "-o", folder,
-                   "-q"]
+        command = [self.gcpstereo, "run", os.path.join(self.configs, config), "-o", folder, "-q"]
         for item in list(sets) + self.extra_sets:
             command += ["--set", item]
         report = self._execute(key, command, folder, "report.json")
@@ -1268,10 +1273,10 @@ def suite_speed(runner, baseline, scenes, frames, include_fountain, include_synt
           "same rectified pair, timed around compute() only (as endtoend); × SGBM = gcpstereo "
           "total / SGBM time. Load average when the suite began: %s%s." % (
               "by this build (%s)" % runner.build if not baseline else
-              "by this build (after: %s) and by the baseline build (before: %s) on the same "
-              "inputs and this checkout's configs; after/before = ratios of the after row to "
-              "the before row, and whether every accuracy figure is no worse" % (
-                  runner.build, baseline.build),
+              "by this build (after: %s, configs %s) and by the baseline build (before: %s, "
+              "configs %s) on the same inputs; after/before = ratios of the after row to the "
+              "before row, and whether every accuracy figure is no worse" % (
+                  runner.build, runner.configs, baseline.build, baseline.configs),
               repeat, "" if repeat == 1 else "s",
               " / ".join("%.2f" % x for x in os.getloadavg()),
               " (runs reused with --reuse were timed earlier)" if runner.reuse else "")]
@@ -1283,6 +1288,7 @@ def suite_speed(runner, baseline, scenes, frames, include_fountain, include_synt
     md += speed_summary(kitti, two_view, fountain, builds)
     return {"kitti": kitti, "two_view": two_view, "fountain": fountain, "repeat": repeat,
             "build": runner.build, "baseline_build": baseline.build if baseline else None,
+            "baseline_configs": baseline.configs if baseline else None,
             "teddy_target_scene": timing_scene, "load_average": os.getloadavg(),
             "markdown": "\n".join(md)}
 
@@ -1456,6 +1462,10 @@ def main(argv=None):
     parser.add_argument("--baseline-build", metavar="DIR",
                         help="speed suite: a second build folder (e.g. of an older commit) whose "
                         "gcpstereo also runs every timed run, for before/after figures")
+    parser.add_argument("--baseline-configs", metavar="DIR",
+                        help="speed suite: the configs/ folder the baseline build runs (default: "
+                        "this checkout's), e.g. an older commit's, to time a change of a shipped "
+                        "configuration against the one before it")
     parser.add_argument("--repeat", type=int, default=1, metavar="N",
                         help="speed suite: run each timed run N times, report the median time and "
                         "the largest peak memory (default: 1)")
@@ -1468,7 +1478,12 @@ def main(argv=None):
         parser.error("--repeat must be at least 1")
 
     runner = Runner(args)
-    baseline = Runner(args, build=args.baseline_build) if args.baseline_build else None
+    if args.baseline_configs and not args.baseline_build:
+        parser.error("--baseline-configs needs --baseline-build")
+    if args.baseline_configs and not os.path.isdir(args.baseline_configs):
+        parser.error("--baseline-configs %s is not a folder" % args.baseline_configs)
+    baseline = (Runner(args, build=args.baseline_build, configs=args.baseline_configs)
+                if args.baseline_build else None)
     for program in [runner.gcpstereo] + ([baseline.gcpstereo] if baseline else []):
         if not os.access(program, os.X_OK):
             parser.error("%s not found: build it first (cmake --build %s --target gcpstereo)"
