@@ -476,8 +476,10 @@ void PipelineConfig::Register(config::Schema* s) {
          Range::HalfOpen(0.0, 1.0),
          {"stop when a cycle lowers the energy by less than this fraction (0 = until no move "
           "improves)"});
-  s->Add("optimizer.candidate_labels", &optimizer.candidate_labels, {"all", "local"},
-         {"α-moves over all labels, or per block over labels near the block's WTA votes and D̂"});
+  s->Add("optimizer.candidate_labels", &optimizer.candidate_labels, {"all", "local", "prior"},
+         {"α-moves over all labels (all), per block over labels near the block's WTA votes and D̂ "
+          "(local), or near D̂ and the start labels only (prior: for a dense, trusted D̂ such as "
+          "a LiDAR scan's, with optimizer.initialization prior)"});
   s->Add("optimizer.candidate_block", &optimizer.expansion.candidate_block_px, Range::AtLeast(4),
          {"block side of the local candidate sets", "px"});
   s->Add("optimizer.candidate_radius", &optimizer.expansion.candidate_radius, Range::AtLeast(0),

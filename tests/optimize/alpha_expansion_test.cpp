@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -259,6 +260,86 @@ TEST(AlphaExpansion, RetryingChangedBlocksOnlyStaysCloseToPlainExpansion) {
   EXPECT_LT(b.graph_nodes, a.graph_nodes);
 }
 
+// candidate_labels: prior. A dense prior near the truth over the left half, none over the right:
+// a block that the prior reaches tries only the labels near its prior values and its start labels
+// (the prior rounded), so every final label there lies within the block's prior range ±
+// candidate_radius; a block that it does not reach tries only its pixels' start (WTA) labels.
+TEST(AlphaExpansion, PriorCandidatesStayNearThePriorWhereItReaches) {
+  const int width = 64, height = 48, num_labels = 24, block = 8, half = 32;
+  testing::SceneProblem scene = MakeScene(width, height, num_labels, 21, 6.0f, 0.0);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> gauss(0.0f, 0.4f);
+  scene.problem.prior = cv::Mat(height, width, CV_32F, cv::Scalar(std::nanf("")));
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < half; ++x) {
+      scene.problem.prior.at<float>(y, x) = std::clamp(
+          scene.truth.at<float>(y, x) + gauss(rng), 0.0f, static_cast<float>(num_labels - 1));
+    }
+  }
+  ExpansionOptions local;
+  local.candidate_block_px = block;
+  local.initialization = Initialization::kPrior;
+  local.verify_moves = true;
+  ExpansionOptions prior = local;
+  prior.candidate_labels = CandidateLabels::kPrior;
+  const ExpansionResult a = AlphaExpansion(scene.problem.View(), EnergyOptions(), local);
+  const ExpansionResult b = AlphaExpansion(scene.problem.View(), EnergyOptions(), prior);
+  EXPECT_LT(b.mean_candidates_per_block, a.mean_candidates_per_block)
+      << a.mean_candidates_per_block << " vs " << b.mean_candidates_per_block;
+  EXPECT_LT(b.graph_nodes, a.graph_nodes);
+  EXPECT_LT(b.max_energy_mismatch, 1e-6 * b.breakdown.total());
+  EXPECT_LE(b.breakdown.total(), 1.005 * a.breakdown.total()) << a.Summary() << "\n" << b.Summary();
+  int outside = 0, right_half_off_truth = 0;
+  for (int by = 0; by < height / block; ++by) {
+    for (int bx = 0; bx < half / block; ++bx) {
+      const cv::Rect r(bx * block, by * block, block, block);
+      double lo = 0.0, hi = 0.0;
+      cv::minMaxLoc(scene.problem.prior(r), &lo, &hi);
+      lo = std::floor(lo) - local.candidate_radius;
+      hi = std::ceil(hi) + local.candidate_radius;
+      for (int y = r.y; y < r.y + block; ++y) {
+        for (int x = r.x; x < r.x + block; ++x) {
+          const int label = b.labels.at<int>(y, x);
+          if (label < lo || label > hi) ++outside;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(outside, 0);
+  // Blocks without a prior: each final label is a WTA label (a least cost) of a pixel of the block.
+  const CostVolume& data = scene.problem.data;
+  int not_a_start_label = 0;
+  for (int by = 0; by < height / block; ++by) {
+    for (int bx = half / block; bx < width / block; ++bx) {
+      std::set<int> starts;
+      for (int y = by * block; y < (by + 1) * block; ++y) {
+        for (int x = bx * block; x < (bx + 1) * block; ++x) {
+          const std::uint16_t* costs = data.PixelData(y, x);
+          const std::uint16_t least = *std::min_element(costs, costs + num_labels);
+          for (int l = 0; l < num_labels; ++l) {
+            if (costs[l] == least) starts.insert(l);
+          }
+        }
+      }
+      for (int y = by * block; y < (by + 1) * block; ++y) {
+        for (int x = bx * block; x < (bx + 1) * block; ++x) {
+          if (!starts.count(b.labels.at<int>(y, x))) ++not_a_start_label;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(not_a_start_label, 0);
+  // The data still decide there: the labels are mostly right.
+  for (int y = 0; y < height; ++y) {
+    for (int x = half + block; x < width; ++x) {
+      if (std::abs(b.labels.at<int>(y, x) - scene.truth.at<float>(y, x)) > 2.0f) {
+        ++right_half_off_truth;
+      }
+    }
+  }
+  EXPECT_LT(right_half_off_truth, (width - half - block) * height / 10);
+}
+
 // A "sky" over a textured scene: in the top rows every label costs about the same — a pixel's
 // curve is noise over a faint lean towards label 30 — so their WTA labels are noise and, with the
 // default options, nearly every label becomes a candidate there. With candidate_min_confidence
@@ -364,6 +445,10 @@ TEST(AlphaExpansion, RejectsBadInput) {
     EXPECT_STREQ(e.what(), "optimizer.max_cycles = 0. Violated constraint: >= 1");
   }
   EXPECT_THROW(ParseCandidateLabels("some"), ConfigError);
+  for (CandidateLabels mode : {CandidateLabels::kAll, CandidateLabels::kLocal,
+                               CandidateLabels::kPrior}) {
+    EXPECT_EQ(ParseCandidateLabels(CandidateLabelsName(mode)), mode);
+  }
   options = ExpansionOptions();
   options.candidate_min_confidence = 1.0;
   try {

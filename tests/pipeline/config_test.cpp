@@ -98,7 +98,8 @@ TEST(PipelineConfig, EveryChoiceOfTheAlgorithmKeysLoads) {
        {"propagation.ordering=nested_dissection", "propagation.ordering=amd",
         "propagation.solver=umfpack", "propagation.solver=cholmod",
         "propagation.method=linear_system", "propagation.method=weighted_median",
-        "optimizer.method=wta", "optimizer.method=graph_cuts"}) {
+        "optimizer.method=wta", "optimizer.method=graph_cuts", "optimizer.candidate_labels=all",
+        "optimizer.candidate_labels=local", "optimizer.candidate_labels=prior"}) {
     SCOPED_TRACE(setting);
     LoadedConfig config;
     EXPECT_NO_THROW(config.Load("", {"dataset.path=/x", "dataset.reference=a", setting}));

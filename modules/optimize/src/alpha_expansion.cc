@@ -440,8 +440,8 @@ void CheckLabels(const MrfProblem& problem, const cv::Mat& labels, const char* w
   }
 }
 
-// Per block: the candidate labels of CandidateLabels::kLocal (see the header), returned as
-// per-label lists of block ids in increasing order.
+// Per block: the candidate labels of CandidateLabels::kLocal or kPrior (see the header), returned
+// as per-label lists of block ids in increasing order.
 std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, const cv::Mat& wta,
                                                    const cv::Mat& initial_labels,
                                                    const ExpansionOptions& options,
@@ -475,9 +475,6 @@ std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, co
           for (int l = 0; l < num_labels; ++l) sum[l] += v[l];
         }
       }
-      for (int l = 0; l < num_labels; ++l) {
-        if (sum[l] >= options.candidate_min_votes) mark(l - radius, l + radius);
-      }
       const int row_end = std::min(problem.height(), (by + 1) * block);
       const int col_end = std::min(problem.width(), (bx + 1) * block);
       for (int row = by * block; row < row_end; ++row) {
@@ -491,6 +488,11 @@ std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, co
                    static_cast<int>(std::ceil(prior)) + radius);
             }
           }
+        }
+      }
+      if (options.candidate_labels == CandidateLabels::kLocal) {
+        for (int l = 0; l < num_labels; ++l) {
+          if (sum[l] >= options.candidate_min_votes) mark(l - radius, l + radius);
         }
       }
       for (int l = 0; l < num_labels; ++l) {
@@ -558,14 +560,20 @@ long long StartUnconfidentPixels(const MrfProblem& problem, const ExpansionOptio
 }  // namespace
 
 const char* CandidateLabelsName(CandidateLabels mode) {
-  return mode == CandidateLabels::kAll ? "all" : "local";
+  switch (mode) {
+    case CandidateLabels::kAll: return "all";
+    case CandidateLabels::kLocal: return "local";
+    case CandidateLabels::kPrior: return "prior";
+  }
+  return "?";
 }
 
 CandidateLabels ParseCandidateLabels(const std::string& name) {
   if (name == "all") return CandidateLabels::kAll;
   if (name == "local") return CandidateLabels::kLocal;
-  throw ConfigError(
-      ViolatedConstraint("optimizer.candidate_labels", name, "one of \"all\", \"local\""));
+  if (name == "prior") return CandidateLabels::kPrior;
+  throw ConfigError(ViolatedConstraint("optimizer.candidate_labels", name,
+                                       "one of \"all\", \"local\", \"prior\""));
 }
 
 void ExpansionOptions::Check() const {
@@ -631,7 +639,7 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
   // The winner-take-all labels (one pass over the cost volume): the start labelling and the
   // votes of the local candidate sets.
   cv::Mat wta;
-  if (initial_labels.empty() || options.candidate_labels == CandidateLabels::kLocal) {
+  if (initial_labels.empty() || options.candidate_labels != CandidateLabels::kAll) {
     wta = WinnerTakeAll(*problem.data);
   }
   if (initial_labels.empty()) {
@@ -658,7 +666,7 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
   }
   solver.SetLabels(labels);
   std::vector<std::vector<int>> blocks_of_label;
-  if (options.candidate_labels == CandidateLabels::kLocal) {
+  if (options.candidate_labels != CandidateLabels::kAll) {
     blocks_of_label =
         LocalCandidateBlocks(problem, votes, labels, options, energy_options, solver.blocks_x(),
                              solver.blocks_y(), &result.mean_candidates_per_block);

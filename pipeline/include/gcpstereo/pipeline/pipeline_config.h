@@ -116,7 +116,7 @@ struct OptimizerOptions {
   optimize::EnergyOptions energy;
   optimize::ExpansionOptions expansion;
   optimize::RefinementOptions refinement;
-  std::string candidate_labels = "local";  // all | local
+  std::string candidate_labels = "local";  // all | local | prior
   std::string initialization = "wta";      // wta | prior
   std::string refinement_method = "irls";  // none | parabola | ceres | irls
   std::string blend = "mean";              // mean | feather
