@@ -450,8 +450,10 @@ std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, co
                                                    double* mean_candidates) {
   const int num_labels = problem.num_labels(), block = options.candidate_block_px;
   const int num_blocks = blocks_x * blocks_y, radius = options.candidate_radius;
-  std::vector<int> votes(static_cast<std::size_t>(num_blocks) * num_labels, 0);
-  for (int row = 0; row < problem.height(); ++row) {
+  // The WTA votes per block: kLocal only (kPrior does not read `wta`).
+  const bool vote = options.candidate_labels == CandidateLabels::kLocal;
+  std::vector<int> votes(vote ? static_cast<std::size_t>(num_blocks) * num_labels : 0, 0);
+  for (int row = 0; vote && row < problem.height(); ++row) {
     for (int col = 0; col < problem.width(); ++col) {
       const int b = (row / block) * blocks_x + col / block;
       ++votes[static_cast<std::size_t>(b) * num_labels + wta.ptr<int>(row)[col]];
@@ -467,14 +469,7 @@ std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, co
   };
   for (int by = 0; by < blocks_y; ++by) {
     for (int bx = 0; bx < blocks_x; ++bx) {
-      std::fill(sum.begin(), sum.end(), 0);
       std::fill(candidate.begin(), candidate.end(), 0);
-      for (int y = std::max(0, by - 1); y <= std::min(blocks_y - 1, by + 1); ++y) {
-        for (int x = std::max(0, bx - 1); x <= std::min(blocks_x - 1, bx + 1); ++x) {
-          const int* v = &votes[static_cast<std::size_t>(y * blocks_x + x) * num_labels];
-          for (int l = 0; l < num_labels; ++l) sum[l] += v[l];
-        }
-      }
       const int row_end = std::min(problem.height(), (by + 1) * block);
       const int col_end = std::min(problem.width(), (bx + 1) * block);
       for (int row = by * block; row < row_end; ++row) {
@@ -490,7 +485,14 @@ std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, co
           }
         }
       }
-      if (options.candidate_labels == CandidateLabels::kLocal) {
+      if (vote) {
+        std::fill(sum.begin(), sum.end(), 0);
+        for (int y = std::max(0, by - 1); y <= std::min(blocks_y - 1, by + 1); ++y) {
+          for (int x = std::max(0, bx - 1); x <= std::min(blocks_x - 1, bx + 1); ++x) {
+            const int* v = &votes[static_cast<std::size_t>(y * blocks_x + x) * num_labels];
+            for (int l = 0; l < num_labels; ++l) sum[l] += v[l];
+          }
+        }
         for (int l = 0; l < num_labels; ++l) {
           if (sum[l] >= options.candidate_min_votes) mark(l - radius, l + radius);
         }
@@ -639,7 +641,7 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
   // The winner-take-all labels (one pass over the cost volume): the start labelling and the
   // votes of the local candidate sets.
   cv::Mat wta;
-  if (initial_labels.empty() || options.candidate_labels != CandidateLabels::kAll) {
+  if (initial_labels.empty() || options.candidate_labels == CandidateLabels::kLocal) {
     wta = WinnerTakeAll(*problem.data);
   }
   if (initial_labels.empty()) {
