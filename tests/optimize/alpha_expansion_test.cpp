@@ -329,6 +329,13 @@ TEST(AlphaExpansion, PriorCandidatesStayNearThePriorWhereItReaches) {
     }
   }
   EXPECT_EQ(not_a_start_label, 0);
+  // Without the GCP energy there is no prior to stay near: kPrior is kLocal.
+  EnergyOptions without_prior;
+  without_prior.use_gcp_energy = false;
+  const ExpansionResult c = AlphaExpansion(scene.problem.View(), without_prior, local);
+  const ExpansionResult d = AlphaExpansion(scene.problem.View(), without_prior, prior);
+  EXPECT_EQ(cv::norm(c.labels, d.labels, cv::NORM_INF), 0.0);
+  EXPECT_EQ(c.mean_candidates_per_block, d.mean_candidates_per_block);
   // The data still decide there: the labels are mostly right.
   for (int y = 0; y < height; ++y) {
     for (int x = half + block; x < width; ++x) {

@@ -450,8 +450,9 @@ std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, co
                                                    double* mean_candidates) {
   const int num_labels = problem.num_labels(), block = options.candidate_block_px;
   const int num_blocks = blocks_x * blocks_y, radius = options.candidate_radius;
-  // The WTA votes per block: kLocal only (kPrior does not read `wta`).
-  const bool vote = options.candidate_labels == CandidateLabels::kLocal;
+  const bool use_prior = energy_options.use_gcp_energy && !problem.prior.empty();
+  // The WTA votes per block: kLocal, and kPrior without a prior (then the same as kLocal).
+  const bool vote = options.candidate_labels == CandidateLabels::kLocal || !use_prior;
   std::vector<int> votes(vote ? static_cast<std::size_t>(num_blocks) * num_labels : 0, 0);
   for (int row = 0; vote && row < problem.height(); ++row) {
     for (int col = 0; col < problem.width(); ++col) {
@@ -459,7 +460,6 @@ std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, co
       ++votes[static_cast<std::size_t>(b) * num_labels + wta.ptr<int>(row)[col]];
     }
   }
-  const bool use_prior = energy_options.use_gcp_energy && !problem.prior.empty();
   std::vector<std::vector<int>> blocks_of_label(num_labels);
   std::vector<int> sum(num_labels);
   std::vector<char> candidate(num_labels);
@@ -641,7 +641,10 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
   // The winner-take-all labels (one pass over the cost volume): the start labelling and the
   // votes of the local candidate sets.
   cv::Mat wta;
-  if (initial_labels.empty() || options.candidate_labels == CandidateLabels::kLocal) {
+  const bool prior_candidates = options.candidate_labels == CandidateLabels::kPrior &&
+                                energy_options.use_gcp_energy && !problem.prior.empty();
+  if (initial_labels.empty() ||
+      (options.candidate_labels != CandidateLabels::kAll && !prior_candidates)) {
     wta = WinnerTakeAll(*problem.data);
   }
   if (initial_labels.empty()) {

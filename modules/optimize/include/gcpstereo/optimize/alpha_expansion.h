@@ -25,7 +25,8 @@ enum class CandidateLabels {
   // initial labels in the block — kLocal without the WTA votes. For a dense, trusted D̂ (a LiDAR
   // scan), where the cost's winner-take-all labels add mostly noise candidates: with
   // Initialization::kPrior the start is D̂ rounded, so a block of D̂ tries a few labels around it,
-  // and a block that D̂ does not reach tries its pixels' start (WTA) labels only. A stronger
+  // and a block that D̂ does not reach tries its pixels' start (WTA) labels only; without a prior
+  // (no D̂, or EnergyOptions::use_gcp_energy false) it is kLocal. A stronger
   // approximation than kLocal; energy and accuracy measured in configs/kitti_lidar.yaml (keeping
   // the votes where D̂ does not reach: the same accuracy there, twice the expansion time).
   kPrior,
