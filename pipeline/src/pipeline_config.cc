@@ -479,7 +479,8 @@ void PipelineConfig::Register(config::Schema* s) {
   s->Add("optimizer.candidate_labels", &optimizer.candidate_labels, {"all", "local", "prior"},
          {"α-moves over all labels (all), per block over labels near the block's WTA votes and D̂ "
           "(local), or near D̂ and the start labels only (prior: for a dense, trusted D̂ such as "
-          "a LiDAR scan's, with optimizer.initialization prior)"});
+          "a LiDAR scan's, with optimizer.initialization prior; without a prior — no GCPs, or "
+          "optimizer.use_gcp_energy false — the same as local)"});
   s->Add("optimizer.candidate_block", &optimizer.expansion.candidate_block_px, Range::AtLeast(4),
          {"block side of the local candidate sets", "px"});
   s->Add("optimizer.candidate_radius", &optimizer.expansion.candidate_radius, Range::AtLeast(0),

@@ -55,7 +55,7 @@ class ExpansionSolver {
         for (int p = p0; p < p1; ++p) dst[p] = src[static_cast<std::size_t>(p) * num_labels_ + l];
       }
     }
-    use_prior_ = options_.use_gcp_energy && !problem.prior.empty() && options_.lambda_r > 0.0;
+    use_prior_ = problem.UsesPrior(options_) && options_.lambda_r > 0.0;
     if (use_prior_) {
       prior_.resize(num_pixels_);
       prior_scale_.resize(num_pixels_);
@@ -450,7 +450,7 @@ std::vector<std::vector<int>> LocalCandidateBlocks(const MrfProblem& problem, co
                                                    double* mean_candidates) {
   const int num_labels = problem.num_labels(), block = options.candidate_block_px;
   const int num_blocks = blocks_x * blocks_y, radius = options.candidate_radius;
-  const bool use_prior = energy_options.use_gcp_energy && !problem.prior.empty();
+  const bool use_prior = problem.UsesPrior(energy_options);
   // The WTA votes per block: kLocal, and kPrior without a prior (then the same as kLocal).
   const bool vote = options.candidate_labels == CandidateLabels::kLocal || !use_prior;
   std::vector<int> votes(vote ? static_cast<std::size_t>(num_blocks) * num_labels : 0, 0);
@@ -641,8 +641,8 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
   // The winner-take-all labels (one pass over the cost volume): the start labelling and the
   // votes of the local candidate sets.
   cv::Mat wta;
-  const bool prior_candidates = options.candidate_labels == CandidateLabels::kPrior &&
-                                energy_options.use_gcp_energy && !problem.prior.empty();
+  const bool prior_candidates =
+      options.candidate_labels == CandidateLabels::kPrior && problem.UsesPrior(energy_options);
   if (initial_labels.empty() ||
       (options.candidate_labels != CandidateLabels::kAll && !prior_candidates)) {
     wta = WinnerTakeAll(*problem.data);

@@ -221,7 +221,7 @@ double ComputeEnergy(const MrfProblem& problem, const cv::Mat& labels, const Ene
                 std::to_string(h));
   }
   const CostVolume& costs = *problem.data;
-  const bool use_prior = options.use_gcp_energy && !problem.prior.empty();
+  const bool use_prior = problem.UsesPrior(options);
   EnergyBreakdown e;
   for (int row = 0; row < h; ++row) {
     const int* label_row = labels.ptr<int>(row);

@@ -147,8 +147,7 @@ GridProblem MakeGridProblem(const MrfProblem& problem, const cv::Mat& labels,
   g.prior.assign(n, std::numeric_limits<double>::quiet_NaN());
   g.prior_weight.assign(n, 1.0);
   g.pairs.reserve(2 * n);
-  const bool use_prior =
-      energy_options.use_gcp_energy && !problem.prior.empty() && energy_options.lambda_r > 0.0;
+  const bool use_prior = problem.UsesPrior(energy_options) && energy_options.lambda_r > 0.0;
   for (int row = 0; row < h; ++row) {
     const int* label_row = labels.ptr<int>(row);
     const cv::Vec3b* image_row = problem.image.ptr<cv::Vec3b>(row);

@@ -125,6 +125,11 @@ struct MrfProblem {
   // Throws Error when the cost volume is missing or the image/prior/prior weights do not match
   // its region.
   void Validate() const;
+  // Whether E_gcp takes part: the GCP energy is on and the problem has a prior. Every consumer
+  // (the energy, the candidate labels, the start labelling, the refinement) asks this one question.
+  bool UsesPrior(const EnergyOptions& options) const {
+    return options.use_gcp_energy && !prior.empty();
+  }
   // ω_p at a pixel (1 without prior weights).
   double PriorWeight(int row, int col) const {
     return prior_weight.empty() ? 1.0 : static_cast<double>(prior_weight.ptr<float>(row)[col]);
