@@ -185,6 +185,49 @@ TEST(BirchfieldTomasi, BadInputsAreReported) {
 // Left ramp up, right ramp down: at x = 2, d = 0 the left centre 30 has its left neighbour darker
 // and the right centre 30 its right neighbour darker → 2 positions × 3 rows = 6 differing bits.
 // BT(30, 30) = 0 there, so the cost is census_weight · 6.
+// Whole-pixel disparities take a faster loop (pixel by pixel, hardware popcount where the CPU
+// has it); its entries are the same bytes as the general loop's, which runs for every label as
+// soon as one disparity is fractional. With and without census, summed and max channels, on a
+// region that does not start at the image's origin.
+TEST(BirchfieldTomasiCensus, WholePixelLoopGivesTheGeneralLoopsBytes) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> value(0, 255);
+  cv::Mat left(30, 60, CV_8UC3), right(30, 60, CV_8UC3);
+  for (int r = 0; r < 30; ++r)
+    for (int c = 0; c < 60; ++c) {
+      left.at<cv::Vec3b>(r, c) = cv::Vec3b(value(rng), value(rng), value(rng));
+      right.at<cv::Vec3b>(r, c) = cv::Vec3b(value(rng), value(rng), value(rng));
+    }
+  const std::vector<double> whole = {0, 1, 2, 3, 5, 8, 13, 21, 34, 55};
+  std::vector<double> mixed = whole;
+  mixed.push_back(2.5);
+  const cv::Rect region(7, 3, 53, 20);  // to the right border
+  for (const int census : {1, 5}) {
+    for (const std::string channels : {"sum", "max"}) {
+      BirchfieldTomasiOptions options;
+      options.census_window_px = census;
+      options.census_weight = 1.5;
+      options.truncation = 40;
+      options.channels = channels;
+      const CostVolume fast = ComputeBirchfieldTomasiCost(left, right, whole, region, options);
+      const CostVolume general = ComputeBirchfieldTomasiCost(left, right, mixed, region, options);
+      ASSERT_EQ(fast.max_cost(), general.max_cost());
+      int no_data = 0;
+      for (int r = 0; r < region.height; ++r) {
+        for (int c = 0; c < region.width; ++c) {
+          for (int l = 0; l < static_cast<int>(whole.size()); ++l) {
+            ASSERT_EQ(fast.PixelData(r, c)[l], general.PixelData(r, c)[l])
+                << "census " << census << " " << channels << " pixel " << r << "," << c
+                << " disparity " << whole[l];
+            no_data += fast.HasData(r, c, l) ? 0 : 1;
+          }
+        }
+      }
+      EXPECT_GT(no_data, 0);  // the large disparities leave the right image: both mark it
+    }
+  }
+}
+
 TEST(BirchfieldTomasiCensus, HandComputedHammingDistance) {
   const cv::Mat left = GreyRow({10, 20, 30, 40, 50});
   const cv::Mat right = GreyRow({50, 40, 30, 20, 10});

@@ -114,6 +114,75 @@ inline int Hamming(std::uint64_t a, std::uint64_t b, std::uint64_t mask) {
   return __builtin_popcountll((a ^ b) & mask);
 }
 
+// The pixel-wise costs of one row at integer disparities without a census mask (the common case:
+// rectified pairs at whole-pixel disparities), pixel by pixel so that each pixel's entries are
+// written in one run. The same float operations in the same order as the general loop in
+// PixelCost, so the same bits.
+struct IntegerRow {
+  const Triplet* left = nullptr;   // the row's triplets, channel-fastest
+  const Triplet* right = nullptr;
+  const std::uint64_t* census_left = nullptr;  // null without census
+  const std::uint64_t* census_right = nullptr;
+  const int* disparities = nullptr;
+  int num_labels = 0, channels = 0, width = 0, x0 = 0, count = 0;
+  bool use_max = false;
+  float truncation = 0.0f, census_weight = 0.0f, inv_step = 0.0f;
+};
+
+#if defined(__GNUC__)
+#define GCPSTEREO_INLINE __attribute__((always_inline)) inline
+#else
+#define GCPSTEREO_INLINE inline
+#endif
+
+GCPSTEREO_INLINE void IntegerRowCost(const IntegerRow& row, std::uint16_t* out) {
+  const int channels = row.channels;
+  for (int c = 0; c < row.count; ++c) {
+    const int x = row.x0 + c;
+    const Triplet* lt = row.left + x * channels;
+    std::uint16_t* entries = out + static_cast<std::size_t>(c) * row.num_labels;
+    for (int l = 0; l < row.num_labels; ++l) {
+      const int xr = x - row.disparities[l];
+      if (xr < 0 || xr > row.width - 1) {
+        entries[l] = CostVolume::kNoData;
+        continue;
+      }
+      const Triplet* rt = row.right + xr * channels;
+      float cost = 0.0f;
+      for (int ch = 0; ch < channels; ++ch) {
+        const float dissimilarity = Dissimilarity(lt[ch], rt[ch]);
+        cost = row.use_max ? std::max(cost, dissimilarity) : cost + dissimilarity;
+      }
+      cost = std::min(cost, row.truncation);
+      if (row.census_left != nullptr) {
+        const float hamming = static_cast<float>(
+            __builtin_popcountll(row.census_left[x] ^ row.census_right[xr]));
+        cost += row.census_weight * hamming;
+      }
+      entries[l] = internal::Quantise(cost, row.inv_step);
+    }
+  }
+}
+
+// Compiled twice on x86-64: with the popcnt instruction (chosen when the CPU has it) and without
+// (libgcc's table popcount, a call per Hamming distance). Integer results: the same bits.
+#if defined(__GNUC__) && defined(__x86_64__)
+__attribute__((target("popcnt"))) void IntegerRowCostPopcnt(const IntegerRow& row,
+                                                             std::uint16_t* out) {
+  IntegerRowCost(row, out);
+}
+void IntegerRowCostDispatch(const IntegerRow& row, std::uint16_t* out) {
+  static const bool popcnt = __builtin_cpu_supports("popcnt");
+  if (popcnt) {
+    IntegerRowCostPopcnt(row, out);
+  } else {
+    IntegerRowCost(row, out);
+  }
+}
+#else
+void IntegerRowCostDispatch(const IntegerRow& row, std::uint16_t* out) { IntegerRowCost(row, out); }
+#endif
+
 // The pixel-wise cost (BT, plus census when configured) of `region`.
 CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
                      const std::vector<double>& disparities_px, const cv::Rect& region,
@@ -146,6 +215,15 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
     }
   }
   const int census_bits = census_side * census_side - 1;
+  // Whole-pixel disparities and no census mask: IntegerRowCost.
+  std::vector<int> integer_disparities;
+  if (mask_left.empty()) {
+    for (double d : disparities_px) {
+      if (d != std::floor(d) || std::abs(d) > 1e9) break;
+      integer_disparities.push_back(static_cast<int>(d));
+    }
+    if (integer_disparities.size() != disparities_px.size()) integer_disparities.clear();
+  }
 
   tbb::parallel_for(
       tbb::blocked_range<int>(0, region.height, 1),
@@ -170,6 +248,25 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
             }
           }
           std::uint16_t* out = volume.MutablePixelData(row_local, 0);
+          if (!integer_disparities.empty()) {
+            IntegerRow row;
+            row.left = left_triplets.data();
+            row.right = right_triplets.data();
+            row.census_left = census_l;
+            row.census_right = census_r;
+            row.disparities = integer_disparities.data();
+            row.num_labels = num_labels;
+            row.channels = channels;
+            row.width = width;
+            row.x0 = region.x;
+            row.count = region.width;
+            row.use_max = use_max;
+            row.truncation = truncation;
+            row.census_weight = census_weight;
+            row.inv_step = inv_step;
+            IntegerRowCostDispatch(row, out);
+            continue;
+          }
           for (int l = 0; l < num_labels; ++l) {
             const double d = disparities_px[l];
             const bool integer = d == std::floor(d);

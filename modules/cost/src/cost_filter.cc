@@ -43,55 +43,365 @@ cv::Rect GrowRegion(const cv::Rect& region, int margin_px, const cv::Size& image
 
 namespace {
 
-// Mean of `src` (width × height, row-major) over the (2r+1)² window around each pixel, clipped to
-// the grid. Sequential prefix sums in double: the same input gives the same bits. The vertical
-// prefix sums are kept as whole rows (row y + 1 = row y + the window sums of image row y), so that
-// both passes read and write memory in order and vectorise.
-class BoxMean {
- public:
-  BoxMean(int width, int height, int radius)
-      : width_(width),
-        height_(height),
-        radius_(radius),
-        column_prefix_(static_cast<std::size_t>(width) * (height + 1)),
-        row_prefix_(static_cast<std::size_t>(width) + 1),
-        x_count_(width) {
-    for (int x = 0; x < width_; ++x) {
-      x_count_[x] = std::min(x + radius_, width_ - 1) - std::max(x - radius_, 0) + 1;
-    }
-  }
+#if defined(__GNUC__) && defined(__x86_64__)
+#define GCPSTEREO_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define GCPSTEREO_AVX2_CLONE
+#endif
+// Lambdas inside a cloned function are not cloned with it: inlined, they take the clone's target.
+#if defined(__GNUC__)
+#define GCPSTEREO_INLINE __attribute__((always_inline))
+#else
+#define GCPSTEREO_INLINE
+#endif
 
-  void operator()(const double* src, double* dst) {
-    const std::size_t w = width_;
-    std::fill_n(column_prefix_.begin(), w, 0.0);
-    for (int y = 0; y < height_; ++y) {
-      // Horizontal window sums of row y, accumulated onto the prefix row above.
-      const double* s = src + y * w;
-      row_prefix_[0] = 0.0;
-      for (int x = 0; x < width_; ++x) row_prefix_[x + 1] = row_prefix_[x] + s[x];
-      const double* above = &column_prefix_[y * w];
-      double* out = &column_prefix_[(y + 1) * w];
-      for (int x = 0; x < width_; ++x) {
-        const int lo = std::max(x - radius_, 0), hi = std::min(x + radius_, width_ - 1);
-        out[x] = row_prefix_[hi + 1] - row_prefix_[lo];
-      }
-      for (std::size_t x = 0; x < w; ++x) out[x] += above[x];
-    }
-    // Vertical window sums, divided by the clipped window's area.
-    for (int y = 0; y < height_; ++y) {
-      const int lo = std::max(y - radius_, 0), hi = std::min(y + radius_, height_ - 1);
-      const double y_count = hi - lo + 1;
-      const double* top = &column_prefix_[lo * w];
-      const double* bottom = &column_prefix_[(hi + 1) * w];
-      double* d = dst + y * w;
-      for (std::size_t x = 0; x < w; ++x) d[x] = (bottom[x] - top[x]) / (x_count_[x] * y_count);
-    }
-  }
+// Labels filtered together: a pixel's kLanes entries sit side by side (one AVX2 register of
+// doubles), so every step below is one vector operation per pixel.
+constexpr int kLanes = 4;
+// The coefficients a, b of the guided filter are summed as integer multiples of 2^-20 (rounded to
+// nearest; at most 5e-7 off, against a cost step of max_cost / 65534): integers far below 2^53
+// add exactly in double, so running window sums give the same bits whatever row or column they
+// start from. A tile's result is then bit for bit the same pixels' result on the whole image.
+constexpr double kCoefficientScale = 1048576.0;  // 2^20
+// Four lanes of doubles (GCC's vector extension: one AVX2 register, two SSE2 ones), kept in
+// std::vector<double> buffers (LaneBuffer): aligned like a double and allowed to alias it, as
+// GCC's own unaligned AVX type is (a std::vector of the plain 32-byte aligned vector type was
+// handed a 16-byte aligned buffer here and faulted).
+using Lanes = double __attribute__((vector_size(kLanes * sizeof(double)), aligned(sizeof(double)),
+                                    may_alias));
+
+// `size` Lanes, zeroed.
+class LaneBuffer {
+ public:
+  explicit LaneBuffer(std::size_t size) : data_(size * kLanes, 0.0) {}
+  Lanes* data() { return reinterpret_cast<Lanes*>(data_.data()); }
+  const Lanes* data() const { return reinterpret_cast<const Lanes*>(data_.data()); }
+  Lanes& operator[](std::size_t i) { return data()[i]; }
 
  private:
-  int width_, height_, radius_;
-  std::vector<double> column_prefix_, row_prefix_, x_count_;
+  std::vector<double> data_;
 };
+using FloatLanes = float __attribute__((vector_size(kLanes * sizeof(float))));
+using IntLanes = std::int32_t __attribute__((vector_size(kLanes * sizeof(std::int32_t))));
+
+// Window sums along one row of `width` elements (doubles, or Lanes lane by lane): out[x] = Σ
+// in[x'] over x' ∈ [x − r, x + r] ∩ [0, width), as a running sum. Exact (and so the same bits for
+// any start) when the inputs are integers whose window sums stay below 2^53.
+template <typename T>
+inline void RowWindowSums(const T* in, int width, int radius, T* out) {
+  T acc = {};
+  for (int x = 0; x < std::min(radius, width); ++x) acc += in[x];
+  for (int x = 0; x < width; ++x) {
+    if (x + radius < width) acc += in[x + radius];
+    if (x - radius - 1 >= 0) acc -= in[x - radius - 1];
+    out[x] = acc;
+  }
+}
+
+// Exact window sums of a width × height plane of integers held in doubles (running sums along
+// the rows, then down the columns).
+void PlaneWindowSums(const double* in, int width, int height, int radius, double* out) {
+  const std::size_t w = width;
+  std::vector<double> rows(w * height);
+  for (int y = 0; y < height; ++y) RowWindowSums(in + y * w, width, radius, &rows[y * w]);
+  std::vector<double> acc(w, 0.0);
+  for (int y = 0; y < std::min(radius, height); ++y) {
+    for (std::size_t x = 0; x < w; ++x) acc[x] += rows[y * w + x];
+  }
+  for (int y = 0; y < height; ++y) {
+    if (y + radius < height) {
+      for (std::size_t x = 0; x < w; ++x) acc[x] += rows[(y + radius) * w + x];
+    }
+    if (y - radius - 1 >= 0) {
+      for (std::size_t x = 0; x < w; ++x) acc[x] -= rows[(y - radius - 1) * w + x];
+    }
+    std::copy(acc.begin(), acc.end(), out + y * w);
+  }
+}
+
+// Number of pixels of [i − r, i + r] ∩ [0, n).
+inline int ClippedCount(int i, int radius, int n) {
+  return std::min(i + radius, n - 1) - std::max(i - radius, 0) + 1;
+}
+
+// What every label's filter shares: the guide over the outer region R (grey levels 0–255 and
+// I = level / 255 per channel), its window means mean_I and the inverse of Σ + εU per pixel
+// (symmetric: 1 entry for grey, 6 for colour: xx, xy, xz, yy, yz, zz), all from exact integer
+// window sums.
+struct GuideStatistics {
+  int width = 0, height = 0, channels = 0;
+  std::vector<std::vector<double>> level, image, mean_image, inverse;
+  std::vector<int> x_count;  // pixels of the window at column x
+};
+
+GuideStatistics ComputeGuideStatistics(const cv::Mat& guide, const cv::Rect& outer, int radius,
+                                       bool guided, double epsilon) {
+  GuideStatistics g;
+  g.width = outer.width;
+  g.height = outer.height;
+  g.channels = guide.channels();
+  const int w = g.width, h = g.height, k = g.channels;
+  const std::size_t n = static_cast<std::size_t>(w) * h;
+  g.x_count.resize(w);
+  for (int x = 0; x < w; ++x) g.x_count[x] = ClippedCount(x, radius, w);
+  if (!guided) return g;
+  g.level.assign(k, std::vector<double>(n));
+  g.image.assign(k, std::vector<double>(n));
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* row = guide.ptr<std::uint8_t>(outer.y + y) + outer.x * k;
+    for (int x = 0; x < w; ++x) {
+      for (int ch = 0; ch < k; ++ch) {
+        g.level[ch][y * w + x] = row[x * k + ch];
+        g.image[ch][y * w + x] = row[x * k + ch] / 255.0;
+      }
+    }
+  }
+  std::vector<double> sums(n), product(n);
+  auto area = [&](std::size_t p) {
+    return static_cast<double>(g.x_count[p % w]) * ClippedCount(static_cast<int>(p / w), radius, h);
+  };
+  g.mean_image.assign(k, std::vector<double>(n));
+  for (int ch = 0; ch < k; ++ch) {
+    PlaneWindowSums(g.level[ch].data(), w, h, radius, sums.data());
+    for (std::size_t p = 0; p < n; ++p) g.mean_image[ch][p] = sums[p] / (255.0 * area(p));
+  }
+  std::array<std::vector<double>, 6> cov;
+  int entry = 0;
+  for (int i = 0; i < k; ++i) {
+    for (int j = i; j < k; ++j, ++entry) {
+      for (std::size_t p = 0; p < n; ++p) product[p] = g.level[i][p] * g.level[j][p];
+      PlaneWindowSums(product.data(), w, h, radius, sums.data());
+      cov[entry].resize(n);
+      for (std::size_t p = 0; p < n; ++p) {
+        cov[entry][p] = sums[p] / (255.0 * 255.0 * area(p)) -
+                        g.mean_image[i][p] * g.mean_image[j][p] + (i == j ? epsilon : 0.0);
+      }
+    }
+  }
+  g.inverse.assign(k == 1 ? 1 : 6, std::vector<double>(n));
+  for (std::size_t p = 0; p < n; ++p) {
+    if (k == 1) {
+      g.inverse[0][p] = 1.0 / cov[0][p];
+      continue;
+    }
+    const double a = cov[0][p], b = cov[1][p], c = cov[2][p], d = cov[3][p], e = cov[4][p],
+                 f = cov[5][p];
+    // Adjugate of [[a b c] [b d e] [c e f]] over its determinant (positive definite: ε > 0).
+    const double ixx = d * f - e * e, ixy = c * e - b * f, ixz = b * e - c * d;
+    const double iyy = a * f - c * c, iyz = b * c - a * e, izz = a * d - b * b;
+    const double inv_det = 1.0 / (a * ixx + b * ixy + c * ixz);
+    g.inverse[0][p] = ixx * inv_det;
+    g.inverse[1][p] = ixy * inv_det;
+    g.inverse[2][p] = ixz * inv_det;
+    g.inverse[3][p] = iyy * inv_det;
+    g.inverse[4][p] = iyz * inv_det;
+    g.inverse[5][p] = izz * inv_det;
+  }
+  return g;
+}
+
+// Running window sums down the rows of a stream of rows of `size` Lanes: Row(y) takes row y's
+// horizontal window sums (rows in order), Add(y) / Drop(y) add it to or remove it from sums().
+// Keeps the last 2r + 2 rows, all a vertical running sum needs.
+class RowRing {
+ public:
+  RowRing(int radius, std::size_t size)
+      : slots_(2 * radius + 2), size_(size), rows_(slots_ * size), sums_(size) {}
+  Lanes* Row(int y) { return rows_.data() + (y % slots_) * size_; }
+  void Add(int y) {
+    const Lanes* row = Row(y);
+    Lanes* sums = sums_.data();
+    for (std::size_t i = 0; i < size_; ++i) sums[i] += row[i];
+  }
+  void Drop(int y) {
+    const Lanes* row = Row(y);
+    Lanes* sums = sums_.data();
+    for (std::size_t i = 0; i < size_; ++i) sums[i] -= row[i];
+  }
+  const Lanes* sums() const { return sums_.data(); }
+
+ private:
+  int slots_;
+  std::size_t size_;
+  LaneBuffer rows_, sums_;
+};
+
+struct ChunkJob {
+  const CostVolume* raw = nullptr;
+  const GuideStatistics* guide = nullptr;
+  cv::Rect region;  // in the outer region's coordinates
+  int radius = 0;
+  bool guided = false;
+  double step = 0.0;  // the cost volume's cost step
+  double max_cost = 0.0;
+  float inv_step = 0.0f;
+  CostVolume* out = nullptr;
+};
+
+// Filters labels [first, first + count) (count ≤ kLanes) of job.raw into job.out, streaming down
+// the rows: stage 1 sums the raw costs s (in steps) and g_c · s (g_c the guide's levels) over the
+// window; stage 2 turns them into the guided filter's a, b per pixel (He et al., eqs. 13–14) and
+// sums those over the window; stage 3 writes q = mean a · I + mean b. Only 2r + 2 rows of each
+// stage are held.
+GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count) {
+  const CostVolume& raw = *job.raw;
+  const GuideStatistics& g = *job.guide;
+  const int w = g.width, h = g.height, r = job.radius, k = g.channels;
+  const int nq = job.guided ? 1 + k : 1;  // stage-1 quantities: s, then g_c · s
+  RowRing ring1(r, nq * w), ring2(r, job.guided ? (k + 1) * w : 0);
+  LaneBuffer input(nq * w), coefficients(job.guided ? (k + 1) * w : 0);
+  const double max_steps = 65534.0;  // a row without data: max_cost
+  const cv::Rect& region = job.region;
+
+  // Stage 1, row y: the raw entries, with entries without data replaced by the nearest entry of
+  // the row with data (ties to the left), and their products with the guide's levels.
+  auto push_input = [&](int y) GCPSTEREO_INLINE {
+    Lanes* s = input.data();
+    bool complete = count == kLanes;
+    for (int x = 0; x < w && complete; ++x) {
+      const std::uint16_t* e = raw.PixelData(y, x) + first;
+      complete = e[0] != CostVolume::kNoData && e[1] != CostVolume::kNoData &&
+                 e[2] != CostVolume::kNoData && e[3] != CostVolume::kNoData;
+      s[x] = Lanes{static_cast<double>(e[0]), static_cast<double>(e[1]),
+                   static_cast<double>(e[2]), static_cast<double>(e[3])};
+    }
+    if (!complete) {
+      for (int j = 0; j < kLanes; ++j) {
+        if (j >= count) {
+          for (int x = 0; x < w; ++x) s[x][j] = 0.0;
+          continue;
+        }
+        int last = -1;
+        for (int x = 0; x < w; ++x) {
+          const std::uint16_t v = raw.PixelData(y, x)[first + j];
+          if (v == CostVolume::kNoData) continue;
+          s[x][j] = v;
+          for (int f = last + 1; f < x; ++f) {
+            s[f][j] = (last >= 0 && f - last <= x - f) ? s[last][j] : static_cast<double>(v);
+          }
+          last = x;
+        }
+        for (int f = last + 1; f < w; ++f) s[f][j] = last >= 0 ? s[last][j] : max_steps;
+      }
+    }
+    for (int ch = 0; ch < nq - 1; ++ch) {
+      const double* level = &g.level[ch][static_cast<std::size_t>(y) * w];
+      Lanes* q = input.data() + (1 + ch) * w;
+      for (int x = 0; x < w; ++x) q[x] = level[x] * s[x];
+    }
+    Lanes* row = ring1.Row(y);
+    for (int q = 0; q < nq; ++q) RowWindowSums(input.data() + q * w, w, r, row + q * w);
+    ring1.Add(y);
+  };
+
+  // Writes the filtered costs of row y (outer coordinates) from window means at its columns.
+  auto write_row = [&](int y, auto&& mean_at) GCPSTEREO_INLINE {
+    if (y < region.y || y >= region.y + region.height) return;
+    for (int x = region.x; x < region.x + region.width; ++x) {
+      Lanes q;
+      mean_at(x, q);
+      // internal::Quantise of the cost clamped to [0, max_cost], lane by lane.
+      q = q > 0.0 ? q : 0.0;
+      q = q < job.max_cost ? q : job.max_cost;
+      FloatLanes levels = __builtin_convertvector(q, FloatLanes) * job.inv_step + 0.5f;
+      levels = levels < 65534.0f ? levels : 65534.0f;
+      const IntLanes quantised = __builtin_convertvector(levels, IntLanes);
+      const std::uint16_t* in = raw.PixelData(y, x) + first;
+      std::uint16_t* dst = job.out->MutablePixelData(y - region.y, x - region.x) + first;
+      for (int j = 0; j < count; ++j) {
+        dst[j] = in[j] == CostVolume::kNoData ? CostVolume::kNoData
+                                               : static_cast<std::uint16_t>(quantised[j]);
+      }
+    }
+  };
+
+  // Stage 2, row y (its stage-1 window sums complete): a, b of every pixel, then their window sums.
+  auto push_coefficients = [&](int y) GCPSTEREO_INLINE {
+    const int y_count = ClippedCount(y, r, h);
+    const Lanes* sums = ring1.sums();
+    const std::size_t row0 = static_cast<std::size_t>(y) * w;
+    const double level_step = job.step / 255.0;
+    // Adding and subtracting 1.5 · 2^52 rounds a value of magnitude below 2^51 to an integer (to
+    // nearest, ties to even) in any SIMD width.
+    constexpr double kMagic = 6755399441055744.0;
+    for (int x = 0; x < w; ++x) {
+      const double norm = 1.0 / (static_cast<double>(g.x_count[x]) * y_count);
+      const std::size_t p = row0 + x;
+      const Lanes mean_cost = sums[x] * (job.step * norm);
+      Lanes b = mean_cost;
+      if (k == 1) {
+        const Lanes cov = sums[w + x] * (level_step * norm) - g.mean_image[0][p] * mean_cost;
+        const Lanes a = g.inverse[0][p] * cov;
+        b -= a * g.mean_image[0][p];
+        coefficients[x] = (a * kCoefficientScale + kMagic) - kMagic;
+      } else {
+        const double* inv[6] = {&g.inverse[0][p], &g.inverse[1][p], &g.inverse[2][p],
+                                &g.inverse[3][p], &g.inverse[4][p], &g.inverse[5][p]};
+        const double mx = g.mean_image[0][p], my = g.mean_image[1][p], mz = g.mean_image[2][p];
+        const Lanes cx = sums[w + x] * (level_step * norm) - mx * mean_cost;
+        const Lanes cy = sums[2 * w + x] * (level_step * norm) - my * mean_cost;
+        const Lanes cz = sums[3 * w + x] * (level_step * norm) - mz * mean_cost;
+        const Lanes a0 = *inv[0] * cx + *inv[1] * cy + *inv[2] * cz;
+        const Lanes a1 = *inv[1] * cx + *inv[3] * cy + *inv[4] * cz;
+        const Lanes a2 = *inv[2] * cx + *inv[4] * cy + *inv[5] * cz;
+        b -= a0 * mx + a1 * my + a2 * mz;
+        coefficients[x] = (a0 * kCoefficientScale + kMagic) - kMagic;
+        coefficients[w + x] = (a1 * kCoefficientScale + kMagic) - kMagic;
+        coefficients[2 * w + x] = (a2 * kCoefficientScale + kMagic) - kMagic;
+      }
+      coefficients[k * w + x] = (b * kCoefficientScale + kMagic) - kMagic;
+    }
+    Lanes* row = ring2.Row(y);
+    for (int q = 0; q <= k; ++q) RowWindowSums(coefficients.data() + q * w, w, r, row + q * w);
+    ring2.Add(y);
+  };
+
+  // Stage 3, row y (its stage-2 window sums complete): q = mean a · I + mean b.
+  auto write_guided = [&](int y) GCPSTEREO_INLINE {
+    const int y_count = ClippedCount(y, r, h);
+    const Lanes* sums = ring2.sums();
+    const std::size_t row0 = static_cast<std::size_t>(y) * w;
+    write_row(y, [&](int x, Lanes& q) GCPSTEREO_INLINE {
+      const double norm = 1.0 / (static_cast<double>(g.x_count[x]) * y_count * kCoefficientScale);
+      Lanes v = sums[k * w + x];
+      for (int ch = 0; ch < k; ++ch) v += sums[ch * w + x] * g.image[ch][row0 + x];
+      q = v * norm;
+    });
+  };
+
+  auto write_box = [&](int y) GCPSTEREO_INLINE {
+    const int y_count = ClippedCount(y, r, h);
+    const Lanes* sums = ring1.sums();
+    write_row(y, [&](int x, Lanes& q) GCPSTEREO_INLINE {
+      const double norm = 1.0 / (static_cast<double>(g.x_count[x]) * y_count);
+      q = sums[x] * (job.step * norm);
+    });
+  };
+
+  // Row y of stage 1 is complete once rows up to y + r are in; stage 2's row y − r once stage 1's
+  // row y is.
+  int next_input = 0;
+  for (int y = 0; y < h; ++y) {
+    for (; next_input <= std::min(y + r, h - 1); ++next_input) push_input(next_input);
+    if (y - r - 1 >= 0) ring1.Drop(y - r - 1);
+    if (!job.guided) {
+      write_box(y);
+      continue;
+    }
+    push_coefficients(y);
+    const int y3 = y - r;
+    if (y3 >= 0) {
+      if (y3 - r - 1 >= 0) ring2.Drop(y3 - r - 1);
+      write_guided(y3);
+    }
+  }
+  if (job.guided) {
+    for (int y3 = std::max(h - r, 0); y3 < h; ++y3) {
+      if (y3 - r - 1 >= 0) ring2.Drop(y3 - r - 1);
+      write_guided(y3);
+    }
+  }
+}
 
 }  // namespace
 
@@ -124,164 +434,25 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
     return out;
   }
 
-  const int width = outer.width, height = outer.height;
-  const std::size_t n = static_cast<std::size_t>(width) * height;
-  const int radius = (options.window_px - 1) / 2;
-  const bool guided = options.filter == "guided";
-  const int k = guide.channels();
-  const float max_cost = raw.max_cost();
-  const float inv_step = 1.0f / out.cost_step();
-  const double step = raw.cost_step();
-
-  // Guide statistics shared by all labels: I (k planes in [0, 1]), mean_I and the inverse of
-  // Σ + εU per pixel (symmetric: 1 entry for grey, 6 for colour: xx, xy, xz, yy, yz, zz).
-  std::vector<std::vector<double>> image(k, std::vector<double>(n));
-  std::vector<std::vector<double>> mean_image(k, std::vector<double>(n));
-  std::vector<std::vector<double>> inverse(k == 1 ? 1 : 6, std::vector<double>(n));
-  if (guided) {
-    for (int y = 0; y < height; ++y) {
-      const std::uint8_t* g = guide.ptr<std::uint8_t>(outer.y + y) + outer.x * k;
-      for (int x = 0; x < width; ++x) {
-        for (int ch = 0; ch < k; ++ch) image[ch][y * width + x] = g[x * k + ch] / 255.0;
-      }
-    }
-    BoxMean box(width, height, radius);
-    for (int ch = 0; ch < k; ++ch) box(image[ch].data(), mean_image[ch].data());
-    std::vector<double> product(n), mean_product(n);
-    std::array<std::vector<double>, 6> cov;
-    int entry = 0;
-    for (int i = 0; i < k; ++i) {
-      for (int j = i; j < k; ++j, ++entry) {
-        for (std::size_t p = 0; p < n; ++p) product[p] = image[i][p] * image[j][p];
-        box(product.data(), mean_product.data());
-        cov[entry].resize(n);
-        for (std::size_t p = 0; p < n; ++p) {
-          cov[entry][p] = mean_product[p] - mean_image[i][p] * mean_image[j][p] +
-                          (i == j ? options.guided_epsilon : 0.0);
-        }
-      }
-    }
-    for (std::size_t p = 0; p < n; ++p) {
-      if (k == 1) {
-        inverse[0][p] = 1.0 / cov[0][p];
-        continue;
-      }
-      const double a = cov[0][p], b = cov[1][p], c = cov[2][p], d = cov[3][p], e = cov[4][p],
-                   f = cov[5][p];
-      // Adjugate of [[a b c] [b d e] [c e f]] over its determinant (positive definite: ε > 0).
-      const double ixx = d * f - e * e, ixy = c * e - b * f, ixz = b * e - c * d;
-      const double iyy = a * f - c * c, iyz = b * c - a * e, izz = a * d - b * b;
-      const double inv_det = 1.0 / (a * ixx + b * ixy + c * ixz);
-      inverse[0][p] = ixx * inv_det;
-      inverse[1][p] = ixy * inv_det;
-      inverse[2][p] = ixz * inv_det;
-      inverse[3][p] = iyy * inv_det;
-      inverse[4][p] = iyz * inv_det;
-      inverse[5][p] = izz * inv_det;
-    }
-  }
-
-  // The volume stores a pixel's labels together, the filter works on one label's slice: a task
-  // takes kChunk consecutive labels, so that copying its slices out of the volume and back reads
-  // and writes each pixel's entries in one run instead of one cache line per label.
-  constexpr int kChunk = 8;
-  const int num_chunks = (num_labels + kChunk - 1) / kChunk;
-  const std::size_t region_n = static_cast<std::size_t>(region.width) * region.height;
+  ChunkJob job;
+  job.raw = &raw;
+  job.radius = (options.window_px - 1) / 2;
+  job.guided = options.filter == "guided";
+  const GuideStatistics statistics =
+      ComputeGuideStatistics(guide, outer, job.radius, job.guided, options.guided_epsilon);
+  job.guide = &statistics;
+  job.region = cv::Rect(ox, oy, region.width, region.height);
+  job.step = raw.cost_step();
+  job.max_cost = raw.max_cost();
+  job.inv_step = 1.0f / out.cost_step();
+  job.out = &out;
+  const int num_chunks = (num_labels + kLanes - 1) / kLanes;
   tbb::parallel_for(
       tbb::blocked_range<int>(0, num_chunks, 1),
       [&](const tbb::blocked_range<int>& range) {
-        BoxMean box(width, height, radius);
-        std::vector<double> cost(n), mean_cost(n), result(n), work(n);
-        std::vector<std::vector<double>> a(guided ? k : 0, std::vector<double>(n));
-        std::vector<double> b(guided ? n : 0);
-        // One label's slice `in` (the raw entries, width × height) → its filtered and quantised
-        // entries over `region` in `slice_out`.
-        auto filter_slice = [&](const std::uint16_t* in, std::uint16_t* slice_out) {
-          // The slice, with entries without data replaced by the nearest entry of the row.
-          for (int y = 0; y < height; ++y) {
-            double* row = &cost[static_cast<std::size_t>(y) * width];
-            const std::uint16_t* in_row = in + static_cast<std::size_t>(y) * width;
-            int last = -1;
-            for (int x = 0; x < width; ++x) {
-              const std::uint16_t s = in_row[x];
-              if (s == CostVolume::kNoData) continue;
-              row[x] = s * step;
-              for (int f = last + 1; f < x; ++f) {
-                // Nearest: left when closer (ties to the left), else this entry.
-                row[f] = (last >= 0 && f - last <= x - f) ? row[last] : row[x];
-              }
-              last = x;
-            }
-            for (int f = last + 1; f < width; ++f) row[f] = last >= 0 ? row[last] : max_cost;
-          }
-          box(cost.data(), mean_cost.data());
-          if (!guided) {
-            result.swap(mean_cost);
-          } else {
-            std::array<std::vector<double>, 3> cov_ip;
-            for (int ch = 0; ch < k; ++ch) {
-              for (std::size_t p = 0; p < n; ++p) work[p] = image[ch][p] * cost[p];
-              cov_ip[ch].resize(n);
-              box(work.data(), cov_ip[ch].data());
-              for (std::size_t p = 0; p < n; ++p) {
-                cov_ip[ch][p] -= mean_image[ch][p] * mean_cost[p];
-              }
-            }
-            for (std::size_t p = 0; p < n; ++p) {
-              double bp = mean_cost[p];
-              if (k == 1) {
-                a[0][p] = inverse[0][p] * cov_ip[0][p];
-                bp -= a[0][p] * mean_image[0][p];
-              } else {
-                const double cx = cov_ip[0][p], cy = cov_ip[1][p], cz = cov_ip[2][p];
-                a[0][p] = inverse[0][p] * cx + inverse[1][p] * cy + inverse[2][p] * cz;
-                a[1][p] = inverse[1][p] * cx + inverse[3][p] * cy + inverse[4][p] * cz;
-                a[2][p] = inverse[2][p] * cx + inverse[4][p] * cy + inverse[5][p] * cz;
-                bp -= a[0][p] * mean_image[0][p] + a[1][p] * mean_image[1][p] +
-                      a[2][p] * mean_image[2][p];
-              }
-              b[p] = bp;
-            }
-            box(b.data(), result.data());
-            for (int ch = 0; ch < k; ++ch) {
-              box(a[ch].data(), work.data());
-              for (std::size_t p = 0; p < n; ++p) result[p] += work[p] * image[ch][p];
-            }
-          }
-          for (int r = 0; r < region.height; ++r) {
-            for (int c = 0; c < region.width; ++c) {
-              const std::size_t p = static_cast<std::size_t>(oy + r) * width + ox + c;
-              std::uint16_t& dst = slice_out[static_cast<std::size_t>(r) * region.width + c];
-              if (in[p] == CostVolume::kNoData) {
-                dst = CostVolume::kNoData;
-                continue;
-              }
-              dst = internal::Quantise(
-                  static_cast<float>(std::clamp(result[p], 0.0, static_cast<double>(max_cost))),
-                  inv_step);
-            }
-          }
-        };
-        std::vector<std::uint16_t> in_slices(kChunk * n), out_slices(kChunk * region_n);
         for (int chunk = range.begin(); chunk != range.end(); ++chunk) {
-          const int first = chunk * kChunk, count = std::min(kChunk, num_labels - first);
-          for (int y = 0; y < height; ++y) {
-            for (int x = 0; x < width; ++x) {
-              const std::uint16_t* entries = raw.PixelData(y, x) + first;
-              const std::size_t p = static_cast<std::size_t>(y) * width + x;
-              for (int j = 0; j < count; ++j) in_slices[j * n + p] = entries[j];
-            }
-          }
-          for (int j = 0; j < count; ++j) {
-            filter_slice(&in_slices[j * n], &out_slices[j * region_n]);
-          }
-          for (int r = 0; r < region.height; ++r) {
-            for (int c = 0; c < region.width; ++c) {
-              std::uint16_t* entries = out.MutablePixelData(r, c) + first;
-              const std::size_t p = static_cast<std::size_t>(r) * region.width + c;
-              for (int j = 0; j < count; ++j) entries[j] = out_slices[j * region_n + p];
-            }
-          }
+          const int first = chunk * kLanes;
+          FilterChunk(job, first, std::min(kLanes, num_labels - first));
         }
       },
       tbb::simple_partitioner());
