@@ -56,8 +56,8 @@ Suites
             --baseline-configs DIR: the baseline runs DIR's configuration files (an older
             commit's configs/) instead of this checkout's.
             Not part of 'all': it times endtoend's runs again, about 4-5 minutes per build and
-            repetition on 2 cores (measured on an idle machine: a KITTI frame 5-6 s, Aloe 8 s, the
-            fountain-P11 view 1 min, the synthetic fountain view 46 s).
+            repetition on 2 cores (measured on an idle machine: a KITTI frame 3.5-4.5 s, Aloe
+            8.5 s, the fountain-P11 view 1 min, the synthetic fountain view 46 s).
             Other work on the machine moves these times by a factor up to 2: compare builds in
             one invocation (--baseline-build), whose runs take turns.
 

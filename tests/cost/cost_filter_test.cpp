@@ -260,6 +260,84 @@ TEST(CostFilter, StreamingFilterEqualsTheFilterWrittenOut) {
   }
 }
 
+// Rows wider than a filter task's strip of columns (128): the strips' seams give the filter
+// written out, a tile at another offset (other seams) is a crop of the whole image, and an entry
+// without data is filled from the nearest entry of the whole row even when that lies in another
+// strip (disparity 200.5 leaves the 300-px row's first 201 pixels without data).
+TEST(CostFilter, WideRowsFilteredInStripsGiveTheWholeRowsResult) {
+  const cv::Mat left = RandomImage(14, 300, CV_8UC3, 31);
+  const cv::Mat right = RandomImage(14, 300, CV_8UC3, 32);
+  const std::vector<double> d = {0, 3, 40, 150, 200.5};
+  BirchfieldTomasiOptions options;
+  options.truncation = 60;
+  options.census_window_px = 5;
+  options.census_weight = 2;
+  options.window.window_px = 5;
+  const cv::Rect full(0, 0, 300, 14);
+  const CostVolume whole = ComputeBirchfieldTomasiCost(left, right, d, full, options);
+  for (const cv::Rect tile : {cv::Rect(50, 2, 230, 10), cv::Rect(120, 0, 180, 14)}) {
+    const CostVolume part = ComputeBirchfieldTomasiCost(left, right, d, tile, options);
+    for (int r = 0; r < tile.height; ++r) {
+      for (int c = 0; c < tile.width; ++c) {
+        ASSERT_EQ(std::memcmp(part.PixelData(r, c), whole.PixelData(tile.y + r, tile.x + c),
+                              sizeof(std::uint16_t) * d.size()),
+                  0)
+            << "tile (" << tile.x << "," << tile.y << ") pixel " << r << "," << c;
+      }
+    }
+  }
+  // Against the filter written out, at the seams of the whole image's strips and at the border.
+  BirchfieldTomasiOptions pixelwise = options;
+  pixelwise.window.window_px = 1;
+  const CostVolume raw = ComputeBirchfieldTomasiCost(left, right, d, full, pixelwise);
+  double worst = 0.0;
+  int checked = 0;
+  for (const int c : {0, 1, 2, 125, 126, 127, 128, 129, 130, 200, 201, 255, 256, 257, 299}) {
+    for (const int r : {0, 6, 13}) {
+      for (int l = 0; l < static_cast<int>(d.size()); ++l) {
+        if (!raw.HasData(r, c, l)) {
+          EXPECT_FALSE(whole.HasData(r, c, l));
+          continue;
+        }
+        const double expected = std::clamp(
+            ReferenceGuided(raw, left, l, 2, options.window.guided_epsilon, r, c, true), 0.0,
+            double(raw.max_cost()));
+        worst = std::max(worst, std::abs(whole.Cost(r, c, l) - expected));
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 100);
+  EXPECT_LE(worst, whole.cost_step() * 1.001);
+
+  // An entry without data whose nearest entry lies in the strip before: columns 124–129 have no
+  // data, the second strip's columns start at 128 and its span at 124, and 126's nearest entry
+  // with data is 123, outside that span, which reaches the output at 130 through the windows.
+  CostVolume gap(full, 2, 90.0f);
+  std::mt19937 rng(41);
+  std::uniform_int_distribution<int> stored(0, 65534);
+  for (int r = 0; r < gap.height(); ++r) {
+    for (int c = 0; c < gap.width(); ++c) {
+      for (int l = 0; l < 2; ++l) {
+        gap.MutablePixelData(r, c)[l] = (l == 0 && c >= 124 && c <= 129)
+                                            ? CostVolume::kNoData
+                                            : static_cast<std::uint16_t>(stored(rng));
+      }
+    }
+  }
+  const CostVolume filtered = FilterCostVolume(gap, left, full, options.window);
+  worst = 0.0;
+  for (int c = 116; c <= 136; ++c) {
+    for (const int r : {0, 7, 13}) {
+      if (c >= 124 && c <= 129) continue;
+      const double expected = std::clamp(
+          ReferenceGuided(gap, left, 0, 2, options.window.guided_epsilon, r, c, true), 0.0, 90.0);
+      worst = std::max(worst, std::abs(filtered.Cost(r, c, 0) - expected));
+    }
+  }
+  EXPECT_LE(worst, filtered.cost_step() * 1.001);
+}
+
 BirchfieldTomasiOptions CensusGuided() {
   BirchfieldTomasiOptions options;
   options.truncation = 60;

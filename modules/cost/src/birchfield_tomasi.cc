@@ -215,12 +215,15 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
     }
   }
   const int census_bits = census_side * census_side - 1;
-  // Whole-pixel disparities and no census mask: IntegerRowCost.
+  // Whole-pixel disparities and no census mask: IntegerRowCost. A disparity within 1e-9 px of a
+  // whole pixel counts as that pixel: the pipeline's labels come back from depth as f·B / depth
+  // (2.9999999999999996 for 3), where interpolating gives the whole pixel's costs anyway.
   std::vector<int> integer_disparities;
   if (mask_left.empty()) {
     for (double d : disparities_px) {
-      if (d != std::floor(d) || std::abs(d) > 1e9) break;
-      integer_disparities.push_back(static_cast<int>(d));
+      const double whole = std::round(d);
+      if (std::abs(d - whole) > 1e-9 || std::abs(whole) > 1e9) break;
+      integer_disparities.push_back(static_cast<int>(whole));
     }
     if (integer_disparities.size() != disparities_px.size()) integer_disparities.clear();
   }

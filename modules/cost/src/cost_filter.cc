@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <vector>
 
@@ -83,6 +84,7 @@ class LaneBuffer {
 };
 using FloatLanes = float __attribute__((vector_size(kLanes * sizeof(float))));
 using IntLanes = std::int32_t __attribute__((vector_size(kLanes * sizeof(std::int32_t))));
+using ShortLanes = std::uint16_t __attribute__((vector_size(kLanes * sizeof(std::uint16_t))));
 
 // Window sums along one row of `width` elements (doubles, or Lanes lane by lane): out[x] = Σ
 // in[x'] over x' ∈ [x − r, x + r] ∩ [0, width), as a running sum. Exact (and so the same bits for
@@ -91,9 +93,20 @@ template <typename T>
 inline void RowWindowSums(const T* in, int width, int radius, T* out) {
   T acc = {};
   for (int x = 0; x < std::min(radius, width); ++x) acc += in[x];
-  for (int x = 0; x < width; ++x) {
+  // x < first: nothing leaves the window yet; x >= last: nothing enters it any more.
+  const int first = std::min(width, radius + 1), last = std::max(first, width - radius);
+  for (int x = 0; x < first; ++x) {
     if (x + radius < width) acc += in[x + radius];
-    if (x - radius - 1 >= 0) acc -= in[x - radius - 1];
+    out[x] = acc;
+  }
+  // One addition on the running sum per pixel (the difference does not wait for it); exact, so
+  // the same as adding and then subtracting.
+  for (int x = first; x < last; ++x) {
+    acc += in[x + radius] - in[x - radius - 1];
+    out[x] = acc;
+  }
+  for (int x = last; x < width; ++x) {
+    acc -= in[x - radius - 1];
     out[x] = acc;
   }
 }
@@ -124,13 +137,17 @@ inline int ClippedCount(int i, int radius, int n) {
   return std::min(i + radius, n - 1) - std::max(i - radius, 0) + 1;
 }
 
-// What every label's filter shares: the guide over the outer region R (grey levels 0–255 and
-// I = level / 255 per channel), its window means mean_I and the inverse of Σ + εU per pixel
+// What every label's filter shares: the guide over the outer region R (grey levels 0–255 per
+// channel; I = level / 255), its window means mean_I and the inverse of Σ + εU per pixel
 // (symmetric: 1 entry for grey, 6 for colour: xx, xy, xz, yy, yz, zz), all from exact integer
 // window sums.
 struct GuideStatistics {
   int width = 0, height = 0, channels = 0;
-  std::vector<std::vector<double>> level, image, mean_image, inverse;
+  // Kept small, as every 4 labels read them again: levels in bytes, the window statistics in
+  // single precision (their rounding, 6e-8 relative, moves a filtered cost by ~1e-4 of a grey
+  // level at most, under a tenth of a cost step; the same bits wherever the region starts).
+  std::vector<std::vector<std::uint8_t>> level;
+  std::vector<std::vector<float>> mean_image, inverse;
   std::vector<int> x_count;  // pixels of the window at column x
 };
 
@@ -145,43 +162,47 @@ GuideStatistics ComputeGuideStatistics(const cv::Mat& guide, const cv::Rect& out
   g.x_count.resize(w);
   for (int x = 0; x < w; ++x) g.x_count[x] = ClippedCount(x, radius, w);
   if (!guided) return g;
-  g.level.assign(k, std::vector<double>(n));
-  g.image.assign(k, std::vector<double>(n));
+  g.level.assign(k, std::vector<std::uint8_t>(n));
   for (int y = 0; y < h; ++y) {
     const std::uint8_t* row = guide.ptr<std::uint8_t>(outer.y + y) + outer.x * k;
     for (int x = 0; x < w; ++x) {
       for (int ch = 0; ch < k; ++ch) {
         g.level[ch][y * w + x] = row[x * k + ch];
-        g.image[ch][y * w + x] = row[x * k + ch] / 255.0;
       }
     }
   }
-  std::vector<double> sums(n), product(n);
+  std::vector<double> sums(n), product(n), mean_image(n * k);
   auto area = [&](std::size_t p) {
     return static_cast<double>(g.x_count[p % w]) * ClippedCount(static_cast<int>(p / w), radius, h);
   };
-  g.mean_image.assign(k, std::vector<double>(n));
+  g.mean_image.assign(k, std::vector<float>(n));
   for (int ch = 0; ch < k; ++ch) {
-    PlaneWindowSums(g.level[ch].data(), w, h, radius, sums.data());
-    for (std::size_t p = 0; p < n; ++p) g.mean_image[ch][p] = sums[p] / (255.0 * area(p));
+    for (std::size_t p = 0; p < n; ++p) product[p] = g.level[ch][p];
+    PlaneWindowSums(product.data(), w, h, radius, sums.data());
+    for (std::size_t p = 0; p < n; ++p) {
+      mean_image[ch * n + p] = sums[p] / (255.0 * area(p));
+      g.mean_image[ch][p] = static_cast<float>(mean_image[ch * n + p]);
+    }
   }
   std::array<std::vector<double>, 6> cov;
   int entry = 0;
   for (int i = 0; i < k; ++i) {
     for (int j = i; j < k; ++j, ++entry) {
-      for (std::size_t p = 0; p < n; ++p) product[p] = g.level[i][p] * g.level[j][p];
+      for (std::size_t p = 0; p < n; ++p) {
+        product[p] = static_cast<double>(g.level[i][p]) * g.level[j][p];
+      }
       PlaneWindowSums(product.data(), w, h, radius, sums.data());
       cov[entry].resize(n);
       for (std::size_t p = 0; p < n; ++p) {
         cov[entry][p] = sums[p] / (255.0 * 255.0 * area(p)) -
-                        g.mean_image[i][p] * g.mean_image[j][p] + (i == j ? epsilon : 0.0);
+                        mean_image[i * n + p] * mean_image[j * n + p] + (i == j ? epsilon : 0.0);
       }
     }
   }
-  g.inverse.assign(k == 1 ? 1 : 6, std::vector<double>(n));
+  g.inverse.assign(k == 1 ? 1 : 6, std::vector<float>(n));
   for (std::size_t p = 0; p < n; ++p) {
     if (k == 1) {
-      g.inverse[0][p] = 1.0 / cov[0][p];
+      g.inverse[0][p] = static_cast<float>(1.0 / cov[0][p]);
       continue;
     }
     const double a = cov[0][p], b = cov[1][p], c = cov[2][p], d = cov[3][p], e = cov[4][p],
@@ -190,18 +211,19 @@ GuideStatistics ComputeGuideStatistics(const cv::Mat& guide, const cv::Rect& out
     const double ixx = d * f - e * e, ixy = c * e - b * f, ixz = b * e - c * d;
     const double iyy = a * f - c * c, iyz = b * c - a * e, izz = a * d - b * b;
     const double inv_det = 1.0 / (a * ixx + b * ixy + c * ixz);
-    g.inverse[0][p] = ixx * inv_det;
-    g.inverse[1][p] = ixy * inv_det;
-    g.inverse[2][p] = ixz * inv_det;
-    g.inverse[3][p] = iyy * inv_det;
-    g.inverse[4][p] = iyz * inv_det;
-    g.inverse[5][p] = izz * inv_det;
+    g.inverse[0][p] = static_cast<float>(ixx * inv_det);
+    g.inverse[1][p] = static_cast<float>(ixy * inv_det);
+    g.inverse[2][p] = static_cast<float>(ixz * inv_det);
+    g.inverse[3][p] = static_cast<float>(iyy * inv_det);
+    g.inverse[4][p] = static_cast<float>(iyz * inv_det);
+    g.inverse[5][p] = static_cast<float>(izz * inv_det);
   }
   return g;
 }
 
 // Running window sums down the rows of a stream of rows of `size` Lanes: Row(y) takes row y's
-// horizontal window sums (rows in order), Add(y) / Drop(y) add it to or remove it from sums().
+// horizontal window sums (rows in order), Add(y) / Drop(y) / Slide add it to or remove it from
+// sums().
 // Keeps the last 2r + 2 rows, all a vertical running sum needs.
 class RowRing {
  public:
@@ -217,6 +239,13 @@ class RowRing {
     const Lanes* row = Row(y);
     Lanes* sums = sums_.data();
     for (std::size_t i = 0; i < size_; ++i) sums[i] -= row[i];
+  }
+  // Add(entering) and Drop(leaving) in one pass (exact sums: the same result).
+  void Slide(int entering, int leaving) {
+    const Lanes* in = Row(entering);
+    const Lanes* out = Row(leaving);
+    Lanes* sums = sums_.data();
+    for (std::size_t i = 0; i < size_; ++i) sums[i] += in[i] - out[i];
   }
   const Lanes* sums() const { return sums_.data(); }
 
@@ -235,18 +264,25 @@ struct ChunkJob {
   double step = 0.0;  // the cost volume's cost step
   double max_cost = 0.0;
   float inv_step = 0.0f;
-  CostVolume* out = nullptr;
 };
 
-// Filters labels [first, first + count) (count ≤ kLanes) of job.raw into job.out, streaming down
-// the rows: stage 1 sums the raw costs s (in steps) and g_c · s (g_c the guide's levels) over the
-// window; stage 2 turns them into the guided filter's a, b per pixel (He et al., eqs. 13–14) and
-// sums those over the window; stage 3 writes q = mean a · I + mean b. Only 2r + 2 rows of each
-// stage are held.
-GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count) {
+// Filters labels [first, first + count) (count ≤ kLanes) of job.raw at the columns
+// [x0, x1) of the region, streaming down the rows: stage 1 sums the raw costs s (in steps) and
+// g_c · s (g_c the guide's levels) over the window; stage 2 turns them into the guided filter's
+// a, b per pixel (He et al., eqs. 13–14) and sums those over the window; stage 3 writes
+// q = mean a · I + mean b. Works on the columns [x0 − 2r, x1 + 2r) only, and holds 2r + 2 rows of
+// each stage: a strip of ~128 columns keeps all of it in a core's L2 cache. The sums being exact,
+// strips give the bits of the whole row.
+// `in` holds the chunk's raw entries over the span's columns, kLanes per pixel ([row][column]
+// [lane], the span's width per row); `out` receives its filtered entries over the strip, kLanes per
+// pixel ([region row][column − x0][lane]).
+GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count, int x0, int x1,
+                                      const std::uint16_t* in, std::uint16_t* out) {
   const CostVolume& raw = *job.raw;
   const GuideStatistics& g = *job.guide;
-  const int w = g.width, h = g.height, r = job.radius, k = g.channels;
+  const int h = g.height, r = job.radius, k = g.channels;
+  // The span of columns worked on: [sx, sx + w) in the outer region.
+  const int sx = std::max(x0 - 2 * r, 0), w = std::min(x1 + 2 * r, g.width) - sx;
   const int nq = job.guided ? 1 + k : 1;  // stage-1 quantities: s, then g_c · s
   RowRing ring1(r, nq * w), ring2(r, job.guided ? (k + 1) * w : 0);
   LaneBuffer input(nq * w), coefficients(job.guided ? (k + 1) * w : 0);
@@ -259,45 +295,74 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count)
     Lanes* s = input.data();
     bool complete = count == kLanes;
     for (int x = 0; x < w && complete; ++x) {
-      const std::uint16_t* e = raw.PixelData(y, x) + first;
+      const std::uint16_t* e = in + (static_cast<std::size_t>(y) * w + x) * kLanes;
       complete = e[0] != CostVolume::kNoData && e[1] != CostVolume::kNoData &&
                  e[2] != CostVolume::kNoData && e[3] != CostVolume::kNoData;
       s[x] = Lanes{static_cast<double>(e[0]), static_cast<double>(e[1]),
                    static_cast<double>(e[2]), static_cast<double>(e[3])};
     }
     if (!complete) {
+      // Entries without data take the nearest entry with data of the row (ties to the left),
+      // which may lie outside the span: only then is the volume searched beyond it.
       for (int j = 0; j < kLanes; ++j) {
         if (j >= count) {
           for (int x = 0; x < w; ++x) s[x][j] = 0.0;
           continue;
         }
-        int last = -1;
-        for (int x = 0; x < w; ++x) {
-          const std::uint16_t v = raw.PixelData(y, x)[first + j];
-          if (v == CostVolume::kNoData) continue;
-          s[x][j] = v;
-          for (int f = last + 1; f < x; ++f) {
-            s[f][j] = (last >= 0 && f - last <= x - f) ? s[last][j] : static_cast<double>(v);
+        auto entry = [&](int x) { return in[(static_cast<std::size_t>(y) * w + x) * kLanes + j]; };
+        for (int x = 0; x < w;) {
+          if (entry(x) != CostVolume::kNoData) {
+            s[x][j] = entry(x);
+            ++x;
+            continue;
           }
-          last = x;
+          const int a = x;
+          while (x < w && entry(x) == CostVolume::kNoData) ++x;
+          // The run [a, x) of the span; its neighbours with data at columns left, right of R.
+          int left = -1, right = -1;
+          double left_value = 0.0, right_value = 0.0;
+          if (a > 0) {
+            left = sx + a - 1;
+            left_value = entry(a - 1);
+          } else {
+            for (int c = sx - 1; c >= 0 && left < 0; --c) {
+              const std::uint16_t v = raw.PixelData(y, c)[first + j];
+              if (v != CostVolume::kNoData) left = c, left_value = v;
+            }
+          }
+          if (x < w) {
+            right = sx + x;
+            right_value = entry(x);
+          } else {
+            for (int c = sx + w; c < g.width && right < 0; ++c) {
+              const std::uint16_t v = raw.PixelData(y, c)[first + j];
+              if (v != CostVolume::kNoData) right = c, right_value = v;
+            }
+          }
+          for (int f = a; f < x; ++f) {
+            const int column = sx + f;
+            if (left >= 0 && (right < 0 || column - left <= right - column)) {
+              s[f][j] = left_value;
+            } else {
+              s[f][j] = right >= 0 ? right_value : max_steps;
+            }
+          }
         }
-        for (int f = last + 1; f < w; ++f) s[f][j] = last >= 0 ? s[last][j] : max_steps;
       }
     }
     for (int ch = 0; ch < nq - 1; ++ch) {
-      const double* level = &g.level[ch][static_cast<std::size_t>(y) * w];
+      const std::uint8_t* level = &g.level[ch][static_cast<std::size_t>(y) * g.width + sx];
       Lanes* q = input.data() + (1 + ch) * w;
-      for (int x = 0; x < w; ++x) q[x] = level[x] * s[x];
+      for (int x = 0; x < w; ++x) q[x] = static_cast<double>(level[x]) * s[x];
     }
     Lanes* row = ring1.Row(y);
     for (int q = 0; q < nq; ++q) RowWindowSums(input.data() + q * w, w, r, row + q * w);
-    ring1.Add(y);
   };
 
   // Writes the filtered costs of row y (outer coordinates) from window means at its columns.
   auto write_row = [&](int y, auto&& mean_at) GCPSTEREO_INLINE {
     if (y < region.y || y >= region.y + region.height) return;
-    for (int x = region.x; x < region.x + region.width; ++x) {
+    for (int x = x0; x < x1; ++x) {
       Lanes q;
       mean_at(x, q);
       // internal::Quantise of the cost clamped to [0, max_cost], lane by lane.
@@ -306,12 +371,15 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count)
       FloatLanes levels = __builtin_convertvector(q, FloatLanes) * job.inv_step + 0.5f;
       levels = levels < 65534.0f ? levels : 65534.0f;
       const IntLanes quantised = __builtin_convertvector(levels, IntLanes);
-      const std::uint16_t* in = raw.PixelData(y, x) + first;
-      std::uint16_t* dst = job.out->MutablePixelData(y - region.y, x - region.x) + first;
-      for (int j = 0; j < count; ++j) {
-        dst[j] = in[j] == CostVolume::kNoData ? CostVolume::kNoData
-                                               : static_cast<std::uint16_t>(quantised[j]);
-      }
+      const std::uint16_t* entries = in + (static_cast<std::size_t>(y) * w + x - sx) * kLanes;
+      std::uint16_t* dst =
+          out + (static_cast<std::size_t>(y - region.y) * (x1 - x0) + x - x0) * kLanes;
+      // All kLanes lanes (those past `count` are never copied back): no data stays no data.
+      ShortLanes raw_entries;
+      std::memcpy(&raw_entries, entries, sizeof(raw_entries));
+      const ShortLanes filtered = __builtin_convertvector(quantised, ShortLanes);
+      const ShortLanes result = raw_entries == CostVolume::kNoData ? raw_entries : filtered;
+      std::memcpy(dst, &result, sizeof(result));
     }
   };
 
@@ -319,31 +387,32 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count)
   auto push_coefficients = [&](int y) GCPSTEREO_INLINE {
     const int y_count = ClippedCount(y, r, h);
     const Lanes* sums = ring1.sums();
-    const std::size_t row0 = static_cast<std::size_t>(y) * w;
+    const std::size_t row0 = static_cast<std::size_t>(y) * g.width + sx;
     const double level_step = job.step / 255.0;
     // Adding and subtracting 1.5 · 2^52 rounds a value of magnitude below 2^51 to an integer (to
     // nearest, ties to even) in any SIMD width.
     constexpr double kMagic = 6755399441055744.0;
     for (int x = 0; x < w; ++x) {
-      const double norm = 1.0 / (static_cast<double>(g.x_count[x]) * y_count);
+      const double norm = 1.0 / (static_cast<double>(g.x_count[sx + x]) * y_count);
       const std::size_t p = row0 + x;
       const Lanes mean_cost = sums[x] * (job.step * norm);
       Lanes b = mean_cost;
       if (k == 1) {
-        const Lanes cov = sums[w + x] * (level_step * norm) - g.mean_image[0][p] * mean_cost;
-        const Lanes a = g.inverse[0][p] * cov;
-        b -= a * g.mean_image[0][p];
+        const double mean_i = g.mean_image[0][p];
+        const Lanes cov = sums[w + x] * (level_step * norm) - mean_i * mean_cost;
+        const Lanes a = static_cast<double>(g.inverse[0][p]) * cov;
+        b -= a * mean_i;
         coefficients[x] = (a * kCoefficientScale + kMagic) - kMagic;
       } else {
-        const double* inv[6] = {&g.inverse[0][p], &g.inverse[1][p], &g.inverse[2][p],
-                                &g.inverse[3][p], &g.inverse[4][p], &g.inverse[5][p]};
+        double inv[6];
+        for (int e = 0; e < 6; ++e) inv[e] = g.inverse[e][p];
         const double mx = g.mean_image[0][p], my = g.mean_image[1][p], mz = g.mean_image[2][p];
         const Lanes cx = sums[w + x] * (level_step * norm) - mx * mean_cost;
         const Lanes cy = sums[2 * w + x] * (level_step * norm) - my * mean_cost;
         const Lanes cz = sums[3 * w + x] * (level_step * norm) - mz * mean_cost;
-        const Lanes a0 = *inv[0] * cx + *inv[1] * cy + *inv[2] * cz;
-        const Lanes a1 = *inv[1] * cx + *inv[3] * cy + *inv[4] * cz;
-        const Lanes a2 = *inv[2] * cx + *inv[4] * cy + *inv[5] * cz;
+        const Lanes a0 = inv[0] * cx + inv[1] * cy + inv[2] * cz;
+        const Lanes a1 = inv[1] * cx + inv[3] * cy + inv[4] * cz;
+        const Lanes a2 = inv[2] * cx + inv[4] * cy + inv[5] * cz;
         b -= a0 * mx + a1 * my + a2 * mz;
         coefficients[x] = (a0 * kCoefficientScale + kMagic) - kMagic;
         coefficients[w + x] = (a1 * kCoefficientScale + kMagic) - kMagic;
@@ -353,18 +422,20 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count)
     }
     Lanes* row = ring2.Row(y);
     for (int q = 0; q <= k; ++q) RowWindowSums(coefficients.data() + q * w, w, r, row + q * w);
-    ring2.Add(y);
   };
 
   // Stage 3, row y (its stage-2 window sums complete): q = mean a · I + mean b.
   auto write_guided = [&](int y) GCPSTEREO_INLINE {
     const int y_count = ClippedCount(y, r, h);
     const Lanes* sums = ring2.sums();
-    const std::size_t row0 = static_cast<std::size_t>(y) * w;
+    const std::size_t row0 = static_cast<std::size_t>(y) * g.width;
     write_row(y, [&](int x, Lanes& q) GCPSTEREO_INLINE {
       const double norm = 1.0 / (static_cast<double>(g.x_count[x]) * y_count * kCoefficientScale);
-      Lanes v = sums[k * w + x];
-      for (int ch = 0; ch < k; ++ch) v += sums[ch * w + x] * g.image[ch][row0 + x];
+      const int i = x - sx;
+      Lanes v = sums[k * w + i];
+      for (int ch = 0; ch < k; ++ch) {
+        v += sums[ch * w + i] * (g.level[ch][row0 + x] / 255.0);
+      }
       q = v * norm;
     });
   };
@@ -374,7 +445,7 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count)
     const Lanes* sums = ring1.sums();
     write_row(y, [&](int x, Lanes& q) GCPSTEREO_INLINE {
       const double norm = 1.0 / (static_cast<double>(g.x_count[x]) * y_count);
-      q = sums[x] * (job.step * norm);
+      q = sums[x - sx] * (job.step * norm);
     });
   };
 
@@ -382,18 +453,31 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count)
   // row y is.
   int next_input = 0;
   for (int y = 0; y < h; ++y) {
-    for (; next_input <= std::min(y + r, h - 1); ++next_input) push_input(next_input);
-    if (y - r - 1 >= 0) ring1.Drop(y - r - 1);
+    // Stage 1's window for row y: rows [y − r, y + r]; row y + r enters as row y − r − 1 leaves.
+    for (; next_input <= std::min(y + r, h - 1); ++next_input) {
+      push_input(next_input);
+      if (next_input < y + r || y - r - 1 < 0) ring1.Add(next_input);
+    }
+    if (y - r - 1 >= 0) {
+      if (y + r < h) {
+        ring1.Slide(y + r, y - r - 1);
+      } else {
+        ring1.Drop(y - r - 1);
+      }
+    }
     if (!job.guided) {
       write_box(y);
       continue;
     }
     push_coefficients(y);
+    // Stage 2's window for row y3 = y − r: rows [y − 2r, y]; row y enters as y − 2r − 1 leaves.
     const int y3 = y - r;
-    if (y3 >= 0) {
-      if (y3 - r - 1 >= 0) ring2.Drop(y3 - r - 1);
-      write_guided(y3);
+    if (y3 - r - 1 >= 0) {
+      ring2.Slide(y, y3 - r - 1);
+    } else {
+      ring2.Add(y);
     }
+    if (y3 >= 0) write_guided(y3);
   }
   if (job.guided) {
     for (int y3 = std::max(h - r, 0); y3 < h; ++y3) {
@@ -445,14 +529,50 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
   job.step = raw.cost_step();
   job.max_cost = raw.max_cost();
   job.inv_step = 1.0f / out.cost_step();
-  job.out = &out;
-  const int num_chunks = (num_labels + kLanes - 1) / kLanes;
+  // Tasks: a strip of up to kStripPx columns of the region × kGroup labels (one 64-byte cache line
+  // of a pixel's entries). A task copies its entries out of the volume into one plane per 4 labels
+  // first, and back at the end, so that the volume is read and written a whole cache line at a
+  // time rather than 8 bytes of every line by each of 8 chunks.
+  constexpr int kStripPx = 128, kGroup = 8 * kLanes;
+  const int num_groups = (num_labels + kGroup - 1) / kGroup;
+  const int num_strips = (region.width + kStripPx - 1) / kStripPx;
+  const int h = outer.height, r = job.radius;
   tbb::parallel_for(
-      tbb::blocked_range<int>(0, num_chunks, 1),
+      tbb::blocked_range<int>(0, num_groups * num_strips, 1),
       [&](const tbb::blocked_range<int>& range) {
-        for (int chunk = range.begin(); chunk != range.end(); ++chunk) {
-          const int first = chunk * kLanes;
-          FilterChunk(job, first, std::min(kLanes, num_labels - first));
+        for (int task = range.begin(); task != range.end(); ++task) {
+          const int group_first = (task / num_strips) * kGroup, strip = task % num_strips;
+          const int group_count = std::min(kGroup, num_labels - group_first);
+          const int num_chunks = (group_count + kLanes - 1) / kLanes;
+          const int x0 = job.region.x + strip * kStripPx;
+          const int x1 = std::min(x0 + kStripPx, job.region.x + job.region.width);
+          const int sx = std::max(x0 - 2 * r, 0), w = std::min(x1 + 2 * r, outer.width) - sx;
+          const std::size_t in_plane = static_cast<std::size_t>(h) * w * kLanes;
+          const std::size_t out_plane = static_cast<std::size_t>(region.height) * (x1 - x0) * kLanes;
+          std::vector<std::uint16_t> in(num_chunks * in_plane, 0), filtered(num_chunks * out_plane);
+          for (int y = 0; y < h; ++y) {
+            for (int x = 0; x < w; ++x) {
+              const std::uint16_t* entries = raw.PixelData(y, sx + x) + group_first;
+              const std::size_t p = (static_cast<std::size_t>(y) * w + x) * kLanes;
+              for (int i = 0; i < group_count; ++i) {
+                in[(i / kLanes) * in_plane + p + i % kLanes] = entries[i];
+              }
+            }
+          }
+          for (int c = 0; c < num_chunks; ++c) {
+            const int first = group_first + c * kLanes;
+            FilterChunk(job, first, std::min(kLanes, num_labels - first), x0, x1,
+                        &in[c * in_plane], &filtered[c * out_plane]);
+          }
+          for (int y = 0; y < region.height; ++y) {
+            for (int x = x0; x < x1; ++x) {
+              std::uint16_t* entries = out.MutablePixelData(y, x - job.region.x) + group_first;
+              const std::size_t p = (static_cast<std::size_t>(y) * (x1 - x0) + x - x0) * kLanes;
+              for (int i = 0; i < group_count; ++i) {
+                entries[i] = filtered[(i / kLanes) * out_plane + p + i % kLanes];
+              }
+            }
+          }
         }
       },
       tbb::simple_partitioner());
