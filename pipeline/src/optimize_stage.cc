@@ -179,17 +179,28 @@ void CropPrior(const EnergyPrior* prior, const cv::Rect& region,
 }
 
 // The tile problem of a rectified pair seen from `left` (Birchfield–Tomasi against `right`) with
-// `prior` as the GCP energy's prior (none when null). `prior` is read when a tile is built, so it
-// may be filled in after this call; it and `disparities` must outlive the problem.
+// `prior` as the GCP energy's prior (none when null). With `solver` (graph cuts), only the labels
+// its α-expansion and refinement can read are computed (optimize::CandidateLabelBands; every
+// label unless its options allow fewer). `prior` is read when a tile is built, so it may be
+// filled in after this call; it, `disparities` and `solver` must outlive the problem.
 optimize::MakeTileProblem PairTileProblem(const cv::Mat& left, const cv::Mat& right,
                                           const std::vector<double>& disparities,
                                           const cost::BirchfieldTomasiOptions& options,
-                                          const EnergyPrior* prior) {
-  return [left, right, &disparities, &options, prior](const cv::Rect& region) {
+                                          const EnergyPrior* prior, const ViewSolver* solver) {
+  return [left, right, &disparities, &options, prior, solver](const cv::Rect& region) {
     optimize::OwnedMrfProblem problem;
-    problem.data = cost::ComputeBirchfieldTomasiCost(left, right, disparities, region, options);
     problem.image = left(region).clone();
     CropPrior(prior, region, &problem);
+    LabelBands bands;
+    if (solver != nullptr && solver->options.optimizer.method != "wta") {
+      bands = optimize::CandidateLabelBands(problem.prior, problem.prior_weight,
+                                            static_cast<int>(disparities.size()),
+                                            solver->expansion, solver->energy, false);
+    }
+    problem.data =
+        cost::ComputeBirchfieldTomasiCost(left, right, disparities, region, options, &bands);
+    problem.data_computed_share =
+        bands.Fraction(region.size(), static_cast<int>(disparities.size()));
     return problem;
   };
 }
@@ -228,7 +239,7 @@ PartnerSolve SolveMirroredPartner(const OptimizeInputs& in, ViewSolver solver,
   }
   const optimize::MakeTileProblem make_problem = PairTileProblem(
       mirrored_reference, mirrored_neighbor, in.pair.disparities, options.cost.birchfield_tomasi,
-      solver.energy.use_gcp_energy ? &mirrored_prior : nullptr);
+      solver.energy.use_gcp_energy ? &mirrored_prior : nullptr, &solver);
   PartnerSolve partner;
   partner.result = solver.Solve(make_problem, "");
   partner.seconds = timer.ElapsedSeconds();
@@ -242,6 +253,7 @@ json TilesJson(const optimize::TiledResult& optimized) {
     tiles.push_back(
         {{"region", {tile.region.x, tile.region.y, tile.region.width, tile.region.height}},
          {"cost_seconds", tile.setup_seconds},
+         {"cost_entries_computed_percent", 100.0 * tile.data_computed_share},
          {"expansion_seconds", e.time_seconds},
          {"initial_energy", e.initial_energy},
          {"energy_per_cycle", e.energy_per_cycle},
@@ -388,7 +400,7 @@ OptimizeResult OptimizeStage(const OptimizeInputs& in) {
   const optimize::MakeTileProblem make_problem =
       in.cost_method == "birchfield_tomasi"
           ? PairTileProblem(reference.image, in.pair.neighbor->image, in.pair.disparities,
-                            options.cost.birchfield_tomasi, prior)
+                            options.cost.birchfield_tomasi, prior, &solver)
           : PlaneSweepTileProblem(in.dataset, in.labels, options.cost.plane_sweep, prior);
   OptimizeResult result;
   // The neighbour's solve needs nothing from the reference's, so it runs alongside it

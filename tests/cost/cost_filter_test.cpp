@@ -374,6 +374,104 @@ TEST(CostFilter, BirchfieldTomasiTileIsCropOfWholeImage) {
   }
 }
 
+// Random label bands over a region's 8-pixel blocks: some blocks without labels, some with all,
+// the others a few labels, partly beyond the label range.
+LabelBands RandomBands(const cv::Size& size, int num_labels, unsigned seed) {
+  LabelBands bands;
+  bands.block_px = 8;
+  const int bx = (size.width + 7) / 8, by = (size.height + 7) / 8;
+  bands.lo.create(by, bx, CV_32S);
+  bands.hi.create(by, bx, CV_32S);
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> kind(0, 9), start(-3, num_labels), width(0, 6);
+  for (int y = 0; y < by; ++y) {
+    for (int x = 0; x < bx; ++x) {
+      int lo = 0, hi = num_labels - 1;
+      const int k = kind(rng);
+      if (k == 0) {
+        lo = 1, hi = 0;  // none
+      } else if (k > 2) {
+        lo = start(rng);
+        hi = lo + width(rng);
+      }
+      bands.lo.at<int>(y, x) = lo;
+      bands.hi.at<int>(y, x) = hi;
+    }
+  }
+  return bands;
+}
+
+// A volume computed with label bands holds the full volume's entries inside them and, outside,
+// kNoData where there is no data and the largest cost elsewhere: whole-pixel and fractional
+// disparities, guided, box and no window, a tile at an offset and the whole image (the filter's
+// row ranges cut inside the image, strips of 128 columns, groups of 32 labels).
+TEST(CostFilter, LabelBandsHoldTheFullVolumesEntries) {
+  const cv::Mat left = RandomImage(70, 300, CV_8UC3, 51);
+  const cv::Mat right = RandomImage(70, 300, CV_8UC3, 52);
+  std::vector<double> whole_pixels, fractional;
+  for (int i = 0; i < 40; ++i) whole_pixels.push_back(i);
+  for (int i = 0; i < 12; ++i) fractional.push_back(0.75 * i);
+  int inside = 0, outside = 0;
+  for (const std::vector<double>* d : {&whole_pixels, &fractional}) {
+    const int num_labels = static_cast<int>(d->size());
+    for (const int window : {5, 1}) {
+      for (const std::string filter : {"guided", "box"}) {
+        if (window == 1 && filter == "box") continue;
+        BirchfieldTomasiOptions options = CensusGuided();
+        options.window.window_px = window;
+        options.window.filter = filter;
+        for (const cv::Rect region : {cv::Rect(0, 0, 300, 70), cv::Rect(37, 5, 250, 60)}) {
+          const LabelBands bands = RandomBands(region.size(), num_labels, 60 + region.x);
+          const CostVolume full = ComputeBirchfieldTomasiCost(left, right, *d, region, options);
+          const CostVolume banded =
+              ComputeBirchfieldTomasiCost(left, right, *d, region, options, &bands);
+          for (int r = 0; r < region.height; ++r) {
+            for (int c = 0; c < region.width; ++c) {
+              const int lo = bands.lo.at<int>(r / 8, c / 8), hi = bands.hi.at<int>(r / 8, c / 8);
+              for (int l = 0; l < num_labels; ++l) {
+                const std::uint16_t got = banded.PixelData(r, c)[l];
+                const std::uint16_t expected = full.PixelData(r, c)[l];
+                if (l >= lo && l <= hi) {
+                  ++inside;
+                  ASSERT_EQ(got, expected) << filter << " window " << window << " labels "
+                                           << num_labels << " region x " << region.x << " pixel "
+                                           << r << "," << c << " label " << l;
+                } else {
+                  ++outside;
+                  ASSERT_EQ(got, expected == CostVolume::kNoData ? CostVolume::kNoData : 65534)
+                      << filter << " window " << window << " pixel " << r << "," << c << " label "
+                      << l;
+                }
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(inside, 100000);
+  EXPECT_GT(outside, 100000);
+}
+
+TEST(CostFilter, LabelBandsMustFitTheRegion) {
+  const cv::Mat image = RandomImage(20, 30, CV_8UC3, 5);
+  LabelBands bands = RandomBands(cv::Size(30, 20), 4, 1);
+  const std::vector<double> d = {0, 1, 2, 3};
+  EXPECT_THROW(ComputeBirchfieldTomasiCost(image, image, d, cv::Rect(0, 0, 30, 12), {}, &bands),
+               Error);
+  LabelBands all;
+  all.block_px = 16;
+  all.lo = cv::Mat(2, 2, CV_32S, cv::Scalar(0));
+  all.hi = cv::Mat(2, 2, CV_32S, cv::Scalar(3));
+  EXPECT_DOUBLE_EQ(all.Fraction(cv::Size(30, 20), 4), 1.0);
+  all.hi.setTo(1);
+  EXPECT_DOUBLE_EQ(all.Fraction(cv::Size(30, 20), 4), 0.5);
+  const CostVolume half = ComputeBirchfieldTomasiCost(image, image, d, cv::Rect(0, 0, 30, 20), {},
+                                                      &all);
+  EXPECT_EQ(half.PixelData(10, 10)[3], 65534);
+  EXPECT_EQ(half.PixelData(10, 10)[0], 0);  // the image against itself at disparity 0
+}
+
 TEST(CostFilter, SameBytesForOneAndTwoThreads) {
   const cv::Mat left = RandomImage(40, 50, CV_8UC3, 3);
   const cv::Mat right = RandomImage(40, 50, CV_8UC3, 4);

@@ -260,6 +260,95 @@ TEST(AlphaExpansion, RetryingChangedBlocksOnlyStaysCloseToPlainExpansion) {
   EXPECT_LT(b.graph_nodes, a.graph_nodes);
 }
 
+// CandidateLabelBands: the labels α-expansion with prior candidates and the refinement after it
+// read. A data term holding only those (everything else the largest cost, as a banded cost volume
+// holds it) gives the same labels, energy and refined labels as the full one; and the bands are
+// every label whenever the options let the solver read others.
+TEST(AlphaExpansion, CandidateLabelBandsHoldEveryCostTheSolverReads) {
+  const int width = 64, height = 48, num_labels = 24;
+  testing::SceneProblem scene = MakeScene(width, height, num_labels, 27, 6.0f, 0.01);
+  std::mt19937 rng(5);
+  std::normal_distribution<float> gauss(0.0f, 0.6f);
+  scene.problem.prior = cv::Mat(height, width, CV_32F, cv::Scalar(std::nanf("")));
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < 37; ++x) {  // a block column half covered: every label there
+      // Some of the prior beyond the label range (the start label is then clamped to the end).
+      scene.problem.prior.at<float>(y, x) = scene.truth.at<float>(y, x) + gauss(rng) +
+                                            (y < 8 ? 9.0f : 0.0f) - (y >= 40 ? 14.0f : 0.0f);
+    }
+  }
+  ExpansionOptions options;
+  options.candidate_block_px = 8;
+  options.candidate_labels = CandidateLabels::kPrior;
+  options.initialization = Initialization::kPrior;
+  options.verify_moves = true;
+  const EnergyOptions energy;
+  const LabelBands bands =
+      CandidateLabelBands(scene.problem.prior, cv::Mat(), num_labels, options, energy, false);
+  ASSERT_FALSE(bands.empty());
+  const double share = bands.Fraction(cv::Size(width, height), num_labels);
+  EXPECT_GT(share, 0.5);
+  EXPECT_LT(share, 0.85);
+  OwnedMrfProblem banded = scene.problem;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const int lo = bands.lo.at<int>(y / 8, x / 8), hi = bands.hi.at<int>(y / 8, x / 8);
+      std::uint16_t* entries = banded.data.MutablePixelData(y, x);
+      for (int l = 0; l < num_labels; ++l) {
+        if ((l < lo || l > hi) && entries[l] != CostVolume::kNoData) entries[l] = 65534;
+      }
+    }
+  }
+  const ExpansionResult full = AlphaExpansion(scene.problem.View(), energy, options);
+  const ExpansionResult part = AlphaExpansion(banded.View(), energy, options);
+  EXPECT_EQ(cv::norm(full.labels, part.labels, cv::NORM_INF), 0.0);
+  EXPECT_EQ(full.breakdown.total(), part.breakdown.total());
+  EXPECT_EQ(full.moves_tried, part.moves_tried);
+  RefinementOptions refinement;
+  const cv::Mat refined_full = RefineSubLabel(scene.problem.View(), full.labels, energy, refinement);
+  const cv::Mat refined_part = RefineSubLabel(banded.View(), part.labels, energy, refinement);
+  EXPECT_EQ(cv::norm(refined_full, refined_part, cv::NORM_INF), 0.0);
+  // Final labels at a band's edge (the refinement reads one label beyond them).
+  int at_edge = 0;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < 37; ++x) {
+      const int l = full.labels.at<int>(y, x);
+      if (l == bands.lo.at<int>(y / 8, x / 8) + 1 || l == bands.hi.at<int>(y / 8, x / 8) - 1) {
+        ++at_edge;
+      }
+    }
+  }
+  EXPECT_GT(at_edge, 0);
+
+  // Options under which the solver may read any label: no bands.
+  auto none = [&](const ExpansionOptions& o, const EnergyOptions& e, const cv::Mat& weight,
+                  bool initial) {
+    return CandidateLabelBands(scene.problem.prior, weight, num_labels, o, e, initial).empty();
+  };
+  EXPECT_TRUE(none(options, energy, cv::Mat(), true));
+  ExpansionOptions o = options;
+  o.candidate_labels = CandidateLabels::kLocal;
+  EXPECT_TRUE(none(o, energy, cv::Mat(), false));
+  o = options;
+  o.initialization = Initialization::kWinnerTakeAll;
+  EXPECT_TRUE(none(o, energy, cv::Mat(), false));
+  o = options;
+  o.candidate_min_confidence = 0.1;
+  EXPECT_TRUE(none(o, energy, cv::Mat(), false));
+  EnergyOptions e = energy;
+  e.gcp_confidence = 0.5;
+  EXPECT_TRUE(none(options, e, cv::Mat(), false));
+  e = energy;
+  e.use_gcp_energy = false;
+  EXPECT_TRUE(none(options, e, cv::Mat(), false));
+  const cv::Mat spread(height, width, CV_32F, cv::Scalar(0.5f));
+  EXPECT_TRUE(none(options, energy, spread, false));  // gated by the data confidence
+  e = energy;
+  e.gcp_spread_gated = false;
+  EXPECT_FALSE(none(options, e, spread, false));
+  EXPECT_TRUE(CandidateLabelBands(cv::Mat(), cv::Mat(), num_labels, options, energy, false).empty());
+}
+
 // candidate_labels: prior. A dense prior near the truth over the left half, none over the right:
 // a block that the prior reaches tries only the labels near its prior values and its start labels
 // (the prior rounded), so every final label there lies within the block's prior range ±

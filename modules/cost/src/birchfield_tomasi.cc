@@ -70,28 +70,35 @@ inline float Dissimilarity(const Triplet& l, const Triplet& r) {
   return std::min(left_to_right, right_to_left);
 }
 
-// A bit string over the side × side window of each pixel of the rows [y0, y0 + rows) of a grey
-// image, border replicated, neighbours in raster order without the centre: bit i is
-// bit(neighbour i, centre).
+// A bit string over the side × side window of each pixel of the rows [y0, y0 + rows) and the
+// columns [x0, x0 + cols) of a grey image, border replicated, neighbours in raster order without
+// the centre: bit i is bit(neighbour i, centre). Words [row − y0][column − x0].
 template <typename Bit>
-cv::Mat WindowBitsRows(const cv::Mat& grey, int y0, int rows, int side, Bit bit) {
-  cv::Mat words(rows, grey.cols, CV_64F);  // 64-bit words stored in a CV_64F-sized Mat
+cv::Mat WindowBitsRows(const cv::Mat& grey, int y0, int rows, int x0, int cols, int side, Bit bit) {
+  cv::Mat words(rows, cols, CV_64F);  // 64-bit words stored in a CV_64F-sized Mat
   const int h = side / 2;
+  std::vector<const std::uint8_t*> window_rows(side);
   for (int r = 0; r < rows; ++r) {
     std::uint64_t* out = words.ptr<std::uint64_t>(r);
     const int y = y0 + r;
+    for (int dy = -h; dy <= h; ++dy) {
+      window_rows[dy + h] = grey.ptr<std::uint8_t>(std::clamp(y + dy, 0, grey.rows - 1));
+    }
     const std::uint8_t* centre_row = grey.ptr<std::uint8_t>(y);
-    for (int x = 0; x < grey.cols; ++x) {
+    for (int c = 0; c < cols; ++c) {
+      const int x = x0 + c;
       const int centre = centre_row[x];
       std::uint64_t bits = 0;
+      const bool inside = x - h >= 0 && x + h < grey.cols;  // no column to replicate
       for (int dy = -h; dy <= h; ++dy) {
-        const std::uint8_t* row = grey.ptr<std::uint8_t>(std::clamp(y + dy, 0, grey.rows - 1));
+        const std::uint8_t* row = window_rows[dy + h];
         for (int dx = -h; dx <= h; ++dx) {
           if (dx == 0 && dy == 0) continue;
-          bits = (bits << 1) | (bit(row[std::clamp(x + dx, 0, grey.cols - 1)], centre) ? 1u : 0u);
+          const int xx = inside ? x + dx : std::clamp(x + dx, 0, grey.cols - 1);
+          bits = (bits << 1) | (bit(row[xx], centre) ? 1u : 0u);
         }
       }
-      out[x] = bits;
+      out[c] = bits;
     }
   }
   return words;
@@ -99,14 +106,15 @@ cv::Mat WindowBitsRows(const cv::Mat& grey, int y0, int rows, int side, Bit bit)
 
 // Census transform (Zabih & Woodfill 1994): bit i is set when neighbour i is darker than the
 // centre.
-cv::Mat CensusRows(const cv::Mat& grey, int y0, int rows, int side) {
-  return WindowBitsRows(grey, y0, rows, side, [](int n, int c) { return n < c; });
+cv::Mat CensusRows(const cv::Mat& grey, int y0, int rows, int x0, int cols, int side) {
+  return WindowBitsRows(grey, y0, rows, x0, cols, side, [](int n, int c) { return n < c; });
 }
 
 // The census mask (census_mask_threshold): bit i is set when neighbour i is within `threshold`
 // grey levels of the centre.
-cv::Mat CensusMaskRows(const cv::Mat& grey, int y0, int rows, int side, int threshold) {
-  return WindowBitsRows(grey, y0, rows, side,
+cv::Mat CensusMaskRows(const cv::Mat& grey, int y0, int rows, int x0, int cols, int side,
+                       int threshold) {
+  return WindowBitsRows(grey, y0, rows, x0, cols, side,
                         [threshold](int n, int c) { return std::abs(n - c) <= threshold; });
 }
 
@@ -121,9 +129,14 @@ inline int Hamming(std::uint64_t a, std::uint64_t b, std::uint64_t mask) {
 struct IntegerRow {
   const Triplet* left = nullptr;   // the row's triplets, channel-fastest
   const Triplet* right = nullptr;
-  const std::uint64_t* census_left = nullptr;  // null without census
+  // Census words from column census_left_x0 / census_right_x0 on; null without census.
+  const std::uint64_t* census_left = nullptr;
   const std::uint64_t* census_right = nullptr;
+  int census_left_x0 = 0, census_right_x0 = 0;
   const int* disparities = nullptr;
+  // Per pixel of the row, the labels computed (LabelBands): lo[c] … hi[c]; null = all.
+  const int* band_lo = nullptr;
+  const int* band_hi = nullptr;
   int num_labels = 0, channels = 0, width = 0, x0 = 0, count = 0;
   bool use_max = false;
   float truncation = 0.0f, census_weight = 0.0f, inv_step = 0.0f;
@@ -141,7 +154,17 @@ GCPSTEREO_INLINE void IntegerRowCost(const IntegerRow& row, std::uint16_t* out) 
     const int x = row.x0 + c;
     const Triplet* lt = row.left + x * channels;
     std::uint16_t* entries = out + static_cast<std::size_t>(c) * row.num_labels;
-    for (int l = 0; l < row.num_labels; ++l) {
+    int lo = 0, hi = row.num_labels - 1;
+    if (row.band_lo != nullptr) {
+      lo = std::max(row.band_lo[c], 0);
+      hi = std::min(row.band_hi[c], row.num_labels - 1);
+      for (int l = 0; l < row.num_labels; ++l) {
+        if (l >= lo && l <= hi) continue;
+        const int xr = x - row.disparities[l];
+        entries[l] = xr < 0 || xr > row.width - 1 ? CostVolume::kNoData : internal::kNotComputed;
+      }
+    }
+    for (int l = lo; l <= hi; ++l) {
       const int xr = x - row.disparities[l];
       if (xr < 0 || xr > row.width - 1) {
         entries[l] = CostVolume::kNoData;
@@ -156,7 +179,8 @@ GCPSTEREO_INLINE void IntegerRowCost(const IntegerRow& row, std::uint16_t* out) 
       cost = std::min(cost, row.truncation);
       if (row.census_left != nullptr) {
         const float hamming = static_cast<float>(
-            __builtin_popcountll(row.census_left[x] ^ row.census_right[xr]));
+            __builtin_popcountll(row.census_left[x - row.census_left_x0] ^
+                                 row.census_right[xr - row.census_right_x0]));
         cost += row.census_weight * hamming;
       }
       entries[l] = internal::Quantise(cost, row.inv_step);
@@ -183,10 +207,12 @@ void IntegerRowCostDispatch(const IntegerRow& row, std::uint16_t* out) {
 void IntegerRowCostDispatch(const IntegerRow& row, std::uint16_t* out) { IntegerRowCost(row, out); }
 #endif
 
-// The pixel-wise cost (BT, plus census when configured) of `region`.
+// The pixel-wise cost (BT, plus census when configured) of `region`; with `bands` (over
+// `band_region`), only at the labels of the blocks within `margin` pixels of each pixel.
 CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
                      const std::vector<double>& disparities_px, const cv::Rect& region,
-                     const BirchfieldTomasiOptions& options) {
+                     const BirchfieldTomasiOptions& options, const LabelBands* bands,
+                     const cv::Rect& band_region, int margin) {
   const int channels = left.channels();
   const int width = left.cols;
   const int num_labels = static_cast<int>(disparities_px.size());
@@ -200,6 +226,13 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
   CostVolume volume(region, num_labels, max_cost);
   const float inv_step = 1.0f / volume.cost_step();
 
+  // The columns of `right` the disparities reach from the region (with the neighbour of a
+  // fractional position): [right_x0, right_x1].
+  const auto [d_min, d_max] = std::minmax_element(disparities_px.begin(), disparities_px.end());
+  const int right_x0 = static_cast<int>(
+      std::clamp(std::floor(region.x - *d_max) - 1.0, 0.0, static_cast<double>(width - 1)));
+  const int right_x1 = static_cast<int>(std::clamp(
+      std::ceil(region.x + region.width - 1 - *d_min) + 1.0, 0.0, static_cast<double>(width - 1)));
   cv::Mat census_left, census_right, mask_left;
   if (use_census) {
     cv::Mat grey_left = left, grey_right = right;
@@ -207,10 +240,13 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
       cv::cvtColor(left, grey_left, cv::COLOR_BGR2GRAY);
       cv::cvtColor(right, grey_right, cv::COLOR_BGR2GRAY);
     }
-    census_left = CensusRows(grey_left, region.y, region.height, census_side);
-    census_right = CensusRows(grey_right, region.y, region.height, census_side);
+    census_left =
+        CensusRows(grey_left, region.y, region.height, region.x, region.width, census_side);
+    census_right = CensusRows(grey_right, region.y, region.height, right_x0,
+                              right_x1 - right_x0 + 1, census_side);
     if (options.census_mask_threshold > 0) {
-      mask_left = CensusMaskRows(grey_left, region.y, region.height, census_side,
+      mask_left = CensusMaskRows(grey_left, region.y, region.height, region.x, region.width,
+                                 census_side,
                                  options.census_mask_threshold);
     }
   }
@@ -234,8 +270,14 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
         // Triplets of the whole left / right row, channel-fastest; integer positions only.
         std::vector<Triplet> left_triplets(static_cast<std::size_t>(width) * channels);
         std::vector<Triplet> right_triplets(static_cast<std::size_t>(width) * channels);
+        std::vector<int> band_lo(bands != nullptr ? region.width : 0);
+        std::vector<int> band_hi(band_lo.size());
         for (int row_local = range.begin(); row_local != range.end(); ++row_local) {
           const int y = region.y + row_local;
+          if (bands != nullptr) {
+            internal::BandsNear(*bands, band_region, y, region.x, region.width, margin,
+                                band_lo.data(), band_hi.data());
+          }
           const std::uint8_t* left_row = left.ptr<std::uint8_t>(y);
           const std::uint8_t* right_row = right.ptr<std::uint8_t>(y);
           const std::uint64_t* census_l =
@@ -244,9 +286,14 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
               use_census ? census_right.ptr<std::uint64_t>(row_local) : nullptr;
           const std::uint64_t* masks =
               mask_left.empty() ? nullptr : mask_left.ptr<std::uint64_t>(row_local);
-          for (int x = 0; x < width; ++x) {
+          // Only the columns the region and its disparities read.
+          for (int x = region.x; x < region.x + region.width; ++x) {
             for (int ch = 0; ch < channels; ++ch) {
               left_triplets[x * channels + ch] = TripletAt(left_row, channels, ch, width, x);
+            }
+          }
+          for (int x = right_x0; x <= right_x1; ++x) {
+            for (int ch = 0; ch < channels; ++ch) {
               right_triplets[x * channels + ch] = TripletAt(right_row, channels, ch, width, x);
             }
           }
@@ -257,7 +304,13 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
             row.right = right_triplets.data();
             row.census_left = census_l;
             row.census_right = census_r;
+            row.census_left_x0 = region.x;
+            row.census_right_x0 = right_x0;
             row.disparities = integer_disparities.data();
+            if (bands != nullptr) {
+              row.band_lo = band_lo.data();
+              row.band_hi = band_hi.data();
+            }
             row.num_labels = num_labels;
             row.channels = channels;
             row.width = width;
@@ -281,6 +334,10 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
                 entry = CostVolume::kNoData;
                 continue;
               }
+              if (bands != nullptr && (l < band_lo[c] || l > band_hi[c])) {
+                entry = internal::kNotComputed;
+                continue;
+              }
               float cost = 0.0f;
               for (int ch = 0; ch < channels; ++ch) {
                 const Triplet& lt = left_triplets[x * channels + ch];
@@ -295,18 +352,20 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
                 std::uint64_t mask = ~std::uint64_t{0};
                 float scale = 1.0f;
                 if (masks != nullptr) {
-                  const int kept = __builtin_popcountll(masks[x]);
+                  const int kept = __builtin_popcountll(masks[x - region.x]);
                   if (4 * kept >= census_bits) {
-                    mask = masks[x];
+                    mask = masks[x - region.x];
                     scale = static_cast<float>(census_bits) / static_cast<float>(kept);
                   }
                 }
-                const float hamming0 = static_cast<float>(Hamming(census_l[x], census_r[x0], mask));
+                const std::uint64_t centre = census_l[x - region.x];
+                const float hamming0 =
+                    static_cast<float>(Hamming(centre, census_r[x0 - right_x0], mask));
                 float hamming = hamming0;
                 if (!integer) {
                   const float f = static_cast<float>(xr - x0);
                   const float hamming1 = static_cast<float>(
-                      Hamming(census_l[x], census_r[std::min(x0 + 1, width - 1)], mask));
+                      Hamming(centre, census_r[std::min(x0 + 1, width - 1) - right_x0], mask));
                   hamming = hamming0 + (hamming1 - hamming0) * f;
                 }
                 cost += census_weight * scale * hamming;
@@ -325,7 +384,8 @@ CostVolume PixelCost(const cv::Mat& left, const cv::Mat& right,
 CostVolume ComputeBirchfieldTomasiCost(const cv::Mat& left, const cv::Mat& right,
                                        const std::vector<double>& disparities_px,
                                        const cv::Rect& region,
-                                       const BirchfieldTomasiOptions& options) {
+                                       const BirchfieldTomasiOptions& options,
+                                       const LabelBands* bands) {
   options.Check();
   if (left.empty() || (left.type() != CV_8UC3 && left.type() != CV_8UC1)) {
     throw Error("Birchfield-Tomasi cost: the left image must be 8-bit with 1 or 3 channels");
@@ -351,12 +411,16 @@ CostVolume ComputeBirchfieldTomasiCost(const cv::Mat& left, const cv::Mat& right
     throw Error(s.str());
   }
 
+  if (bands != nullptr && bands->empty()) bands = nullptr;
+  if (bands != nullptr) bands->CheckFits(region.size(), "Birchfield-Tomasi cost");
   if (options.window.window_px == 1) {
-    return PixelCost(left, right, disparities_px, region, options);
+    return PixelCost(left, right, disparities_px, region, options, bands, region, 0);
   }
-  const cv::Rect outer = GrowRegion(region, options.window.MarginPx(), left.size());
-  return FilterCostVolume(PixelCost(left, right, disparities_px, outer, options), left, region,
-                          options.window);
+  const int margin = options.window.MarginPx();
+  const cv::Rect outer = GrowRegion(region, margin, left.size());
+  return FilterCostVolume(
+      PixelCost(left, right, disparities_px, outer, options, bands, region, margin), left, region,
+      options.window, bands);
 }
 
 }  // namespace gcpstereo::cost

@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <memory>
 #include <sstream>
 #include <vector>
 
@@ -41,6 +43,41 @@ cv::Rect GrowRegion(const cv::Rect& region, int margin_px, const cv::Size& image
                        region.height + 2 * margin_px);
   return grown & cv::Rect(0, 0, image_size.width, image_size.height);
 }
+
+namespace internal {
+
+void BandsNear(const LabelBands& bands, const cv::Rect& band_region, int y, int x0, int n,
+               int margin, int* lo, int* hi) {
+  std::fill(lo, lo + n, std::numeric_limits<int>::max());
+  std::fill(hi, hi + n, std::numeric_limits<int>::min());
+  const int block = bands.block_px;
+  const int ry0 = std::max(y - margin - band_region.y, 0);
+  const int ry1 = std::min(y + margin - band_region.y, band_region.height - 1);
+  if (ry0 > ry1) return;
+  // The hull over the block rows in reach, per block column, then over the block columns.
+  const int num_bx = bands.lo.cols;
+  std::vector<int> column_lo(num_bx, std::numeric_limits<int>::max());
+  std::vector<int> column_hi(num_bx, std::numeric_limits<int>::min());
+  for (int by = ry0 / block; by <= ry1 / block; ++by) {
+    const int* l = bands.lo.ptr<int>(by);
+    const int* h = bands.hi.ptr<int>(by);
+    for (int bx = 0; bx < num_bx; ++bx) {
+      if (l[bx] > h[bx]) continue;
+      column_lo[bx] = std::min(column_lo[bx], l[bx]);
+      column_hi[bx] = std::max(column_hi[bx], h[bx]);
+    }
+  }
+  for (int c = 0; c < n; ++c) {
+    const int rx0 = std::max(x0 + c - margin - band_region.x, 0);
+    const int rx1 = std::min(x0 + c + margin - band_region.x, band_region.width - 1);
+    for (int bx = rx0 / block; rx0 <= rx1 && bx <= rx1 / block; ++bx) {
+      lo[c] = std::min(lo[c], column_lo[bx]);
+      hi[c] = std::max(hi[c], column_hi[bx]);
+    }
+  }
+}
+
+}  // namespace internal
 
 namespace {
 
@@ -273,11 +310,14 @@ struct ChunkJob {
 // q = mean a · I + mean b. Works on the columns [x0 − 2r, x1 + 2r) only, and holds 2r + 2 rows of
 // each stage: a strip of ~128 columns keeps all of it in a core's L2 cache. The sums being exact,
 // strips give the bits of the whole row.
-// `in` holds the chunk's raw entries over the span's columns, kLanes per pixel ([row][column]
-// [lane], the span's width per row); `out` receives its filtered entries over the strip, kLanes per
-// pixel ([region row][column − x0][lane]).
+// Only the rows [y_begin, y_end) of the outer region stream (see below). `in` holds the chunk's
+// raw entries over the span's columns from outer row in_row0 on, kLanes per pixel ([row −
+// in_row0][column][lane], the span's width per row); `out` receives its filtered entries over the
+// strip from region row out_row0 on, kLanes per pixel ([region row − out_row0][column − x0]
+// [lane]).
 GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count, int x0, int x1,
-                                      const std::uint16_t* in, std::uint16_t* out) {
+                                      int y_begin, int y_end, const std::uint16_t* in,
+                                      int in_row0, std::uint16_t* out, int out_row0) {
   const CostVolume& raw = *job.raw;
   const GuideStatistics& g = *job.guide;
   const int h = g.height, r = job.radius, k = g.channels;
@@ -295,7 +335,7 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count,
     Lanes* s = input.data();
     bool complete = count == kLanes;
     for (int x = 0; x < w && complete; ++x) {
-      const std::uint16_t* e = in + (static_cast<std::size_t>(y) * w + x) * kLanes;
+      const std::uint16_t* e = in + (static_cast<std::size_t>(y - in_row0) * w + x) * kLanes;
       complete = e[0] != CostVolume::kNoData && e[1] != CostVolume::kNoData &&
                  e[2] != CostVolume::kNoData && e[3] != CostVolume::kNoData;
       s[x] = Lanes{static_cast<double>(e[0]), static_cast<double>(e[1]),
@@ -309,7 +349,9 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count,
           for (int x = 0; x < w; ++x) s[x][j] = 0.0;
           continue;
         }
-        auto entry = [&](int x) { return in[(static_cast<std::size_t>(y) * w + x) * kLanes + j]; };
+        auto entry = [&](int x) {
+          return in[(static_cast<std::size_t>(y - in_row0) * w + x) * kLanes + j];
+        };
         for (int x = 0; x < w;) {
           if (entry(x) != CostVolume::kNoData) {
             s[x][j] = entry(x);
@@ -371,9 +413,10 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count,
       FloatLanes levels = __builtin_convertvector(q, FloatLanes) * job.inv_step + 0.5f;
       levels = levels < 65534.0f ? levels : 65534.0f;
       const IntLanes quantised = __builtin_convertvector(levels, IntLanes);
-      const std::uint16_t* entries = in + (static_cast<std::size_t>(y) * w + x - sx) * kLanes;
+      const std::uint16_t* entries =
+          in + (static_cast<std::size_t>(y - in_row0) * w + x - sx) * kLanes;
       std::uint16_t* dst =
-          out + (static_cast<std::size_t>(y - region.y) * (x1 - x0) + x - x0) * kLanes;
+          out + (static_cast<std::size_t>(y - region.y - out_row0) * (x1 - x0) + x - x0) * kLanes;
       // All kLanes lanes (those past `count` are never copied back): no data stays no data.
       ShortLanes raw_entries;
       std::memcpy(&raw_entries, entries, sizeof(raw_entries));
@@ -450,16 +493,19 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count,
   };
 
   // Row y of stage 1 is complete once rows up to y + r are in; stage 2's row y − r once stage 1's
-  // row y is.
-  int next_input = 0;
-  for (int y = 0; y < h; ++y) {
+  // row y is. Only the rows [y_begin, y_end) stream: the windows are clipped to them, so the rows
+  // within the filter's margin of a cut end come out wrong and are not asked for (the window's
+  // pixel counts are those of the whole region, so every other row is exact).
+  const int lo = y_begin, hi = y_end;
+  int next_input = lo;
+  for (int y = lo; y < hi; ++y) {
     // Stage 1's window for row y: rows [y − r, y + r]; row y + r enters as row y − r − 1 leaves.
-    for (; next_input <= std::min(y + r, h - 1); ++next_input) {
+    for (; next_input <= std::min(y + r, hi - 1); ++next_input) {
       push_input(next_input);
-      if (next_input < y + r || y - r - 1 < 0) ring1.Add(next_input);
+      if (next_input < y + r || y - r - 1 < lo) ring1.Add(next_input);
     }
-    if (y - r - 1 >= 0) {
-      if (y + r < h) {
+    if (y - r - 1 >= lo) {
+      if (y + r < hi) {
         ring1.Slide(y + r, y - r - 1);
       } else {
         ring1.Drop(y - r - 1);
@@ -472,17 +518,30 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count,
     push_coefficients(y);
     // Stage 2's window for row y3 = y − r: rows [y − 2r, y]; row y enters as y − 2r − 1 leaves.
     const int y3 = y - r;
-    if (y3 - r - 1 >= 0) {
+    if (y3 - r - 1 >= lo) {
       ring2.Slide(y, y3 - r - 1);
     } else {
       ring2.Add(y);
     }
-    if (y3 >= 0) write_guided(y3);
+    if (y3 >= lo) write_guided(y3);
   }
   if (job.guided) {
-    for (int y3 = std::max(h - r, 0); y3 < h; ++y3) {
-      if (y3 - r - 1 >= 0) ring2.Drop(y3 - r - 1);
+    for (int y3 = std::max(hi - r, lo); y3 < hi; ++y3) {
+      if (y3 - r - 1 >= lo) ring2.Drop(y3 - r - 1);
       write_guided(y3);
+    }
+  }
+}
+
+// Sets the entries of one pixel's labels [first, first + count) outside its band [lo, hi] as
+// LabelBands says: kNoData where `raw_entries` has none, kNotComputed elsewhere.
+inline void ClearOutsideBand(const std::uint16_t* raw_entries, int first, int count, int lo, int hi,
+                             std::uint16_t* entries) {
+  for (int i = 0; i < count; ++i) {
+    const int l = first + i;
+    if (l < lo || l > hi) {
+      entries[i] = raw_entries[i] == CostVolume::kNoData ? CostVolume::kNoData
+                                                          : internal::kNotComputed;
     }
   }
 }
@@ -490,7 +549,7 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count,
 }  // namespace
 
 CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const cv::Rect& region,
-                            const CostFilterOptions& options) {
+                            const CostFilterOptions& options, const LabelBands* bands) {
   options.Check();
   const cv::Rect outer = raw.region();
   if (raw.empty() || region.empty() || (region & outer) != region) {
@@ -506,13 +565,29 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
         "cost filter: the guide image must be 8-bit with 1 or 3 channels and contain the cost "
         "volume's region");
   }
+  if (bands != nullptr && bands->empty()) bands = nullptr;
+  if (bands != nullptr) bands->CheckFits(region.size(), "cost filter");
   const int num_labels = raw.num_labels();
   CostVolume out(region, num_labels, raw.max_cost());
   const int ox = region.x - outer.x, oy = region.y - outer.y;
+  // The band of the block of region pixel (row, col).
+  auto band_of = [&](int row, int col, int* lo, int* hi) {
+    if (bands == nullptr) {
+      *lo = 0, *hi = num_labels - 1;
+      return;
+    }
+    *lo = bands->lo.at<int>(row / bands->block_px, col / bands->block_px);
+    *hi = bands->hi.at<int>(row / bands->block_px, col / bands->block_px);
+  };
   if (options.window_px == 1) {
     for (int r = 0; r < region.height; ++r) {
       for (int c = 0; c < region.width; ++c) {
-        std::copy_n(raw.PixelData(oy + r, ox + c), num_labels, out.MutablePixelData(r, c));
+        const std::uint16_t* entries = raw.PixelData(oy + r, ox + c);
+        std::uint16_t* dst = out.MutablePixelData(r, c);
+        std::copy_n(entries, num_labels, dst);
+        int lo = 0, hi = 0;
+        band_of(r, c, &lo, &hi);
+        ClearOutsideBand(entries, 0, num_labels, lo, hi, dst);
       }
     }
     return out;
@@ -537,6 +612,36 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
   const int num_groups = (num_labels + kGroup - 1) / kGroup;
   const int num_strips = (region.width + kStripPx - 1) / kStripPx;
   const int h = outer.height, r = job.radius;
+  const int margin = options.MarginPx();
+  // The rows of the outer region that labels [first, first + count) need over the region's columns
+  // [c0, c1): those of the blocks whose bands hold any of them, grown by the margin; every row
+  // without bands, none (begin = end) when no block holds them.
+  auto rows_needed = [&](int first, int count, int c0, int c1, int* begin, int* end) {
+    if (bands == nullptr) {
+      *begin = 0, *end = h;
+      return;
+    }
+    const int block = bands->block_px;
+    int first_row = -1, last_row = -1;
+    for (int by = 0; by < bands->lo.rows; ++by) {
+      const int* lo = bands->lo.ptr<int>(by);
+      const int* hi = bands->hi.ptr<int>(by);
+      bool needed = false;
+      for (int bx = c0 / block; bx <= (c1 - 1) / block && !needed; ++bx) {
+        needed = lo[bx] <= hi[bx] && lo[bx] < first + count && hi[bx] >= first;
+      }
+      if (needed) {
+        if (first_row < 0) first_row = by * block;
+        last_row = std::min((by + 1) * block, region.height);
+      }
+    }
+    if (first_row < 0) {
+      *begin = *end = 0;
+      return;
+    }
+    *begin = std::max(oy + first_row - margin, 0);
+    *end = std::min(oy + last_row + margin, h);
+  };
   tbb::parallel_for(
       tbb::blocked_range<int>(0, num_groups * num_strips, 1),
       [&](const tbb::blocked_range<int>& range) {
@@ -547,28 +652,61 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
           const int x0 = job.region.x + strip * kStripPx;
           const int x1 = std::min(x0 + kStripPx, job.region.x + job.region.width);
           const int sx = std::max(x0 - 2 * r, 0), w = std::min(x1 + 2 * r, outer.width) - sx;
-          const std::size_t in_plane = static_cast<std::size_t>(h) * w * kLanes;
-          const std::size_t out_plane = static_cast<std::size_t>(region.height) * (x1 - x0) * kLanes;
-          std::vector<std::uint16_t> in(num_chunks * in_plane, 0), filtered(num_chunks * out_plane);
-          for (int y = 0; y < h; ++y) {
+          std::vector<int> chunk_begin(num_chunks), chunk_end(num_chunks);
+          int copy_begin = h, copy_end = 0;  // the outer rows any chunk streams
+          for (int c = 0; c < num_chunks; ++c) {
+            const int first = group_first + c * kLanes;
+            rows_needed(first, std::min(kLanes, num_labels - first), x0 - job.region.x,
+                        x1 - job.region.x, &chunk_begin[c], &chunk_end[c]);
+            if (chunk_begin[c] < chunk_end[c]) {
+              copy_begin = std::min(copy_begin, chunk_begin[c]);
+              copy_end = std::max(copy_end, chunk_end[c]);
+            }
+          }
+          if (copy_begin >= copy_end) copy_begin = copy_end = 0;
+          // The region rows those give: [out_begin, out_end).
+          const int out_begin = std::clamp(copy_begin - oy, 0, region.height);
+          const int out_end = std::clamp(copy_end - oy, out_begin, region.height);
+          const std::size_t in_plane = static_cast<std::size_t>(copy_end - copy_begin) * w * kLanes;
+          const std::size_t out_plane =
+              static_cast<std::size_t>(out_end - out_begin) * (x1 - x0) * kLanes;
+          // Every entry of `filtered` that is read back is written by FilterChunk (a pixel's band
+          // labels lie in chunks whose rows cover it): no initialisation.
+          std::vector<std::uint16_t> in(num_chunks * in_plane, 0);
+          std::unique_ptr<std::uint16_t[]> filtered(new std::uint16_t[num_chunks * out_plane]);
+          for (int y = copy_begin; y < copy_end; ++y) {
             for (int x = 0; x < w; ++x) {
               const std::uint16_t* entries = raw.PixelData(y, sx + x) + group_first;
-              const std::size_t p = (static_cast<std::size_t>(y) * w + x) * kLanes;
+              const std::size_t p = (static_cast<std::size_t>(y - copy_begin) * w + x) * kLanes;
               for (int i = 0; i < group_count; ++i) {
                 in[(i / kLanes) * in_plane + p + i % kLanes] = entries[i];
               }
             }
           }
           for (int c = 0; c < num_chunks; ++c) {
+            if (chunk_begin[c] >= chunk_end[c]) continue;
             const int first = group_first + c * kLanes;
-            FilterChunk(job, first, std::min(kLanes, num_labels - first), x0, x1,
-                        &in[c * in_plane], &filtered[c * out_plane]);
+            FilterChunk(job, first, std::min(kLanes, num_labels - first), x0, x1, chunk_begin[c],
+                        chunk_end[c], &in[c * in_plane], copy_begin, &filtered[c * out_plane],
+                        out_begin);
           }
+          const int group_last = group_first + group_count - 1;
           for (int y = 0; y < region.height; ++y) {
             for (int x = x0; x < x1; ++x) {
               std::uint16_t* entries = out.MutablePixelData(y, x - job.region.x) + group_first;
-              const std::size_t p = (static_cast<std::size_t>(y) * (x1 - x0) + x - x0) * kLanes;
-              for (int i = 0; i < group_count; ++i) {
+              int lo = 0, hi = 0;
+              band_of(y, x - job.region.x, &lo, &hi);
+              lo = std::max(lo, group_first);
+              hi = std::min(hi, group_last);
+              if (lo > group_first || hi < group_last) {
+                ClearOutsideBand(raw.PixelData(oy + y, x) + group_first, group_first, group_count,
+                                 lo, hi, entries);
+              }
+              if (lo > hi) continue;
+              const std::size_t p =
+                  (static_cast<std::size_t>(y - out_begin) * (x1 - x0) + x - x0) * kLanes;
+              for (int l = lo; l <= hi; ++l) {
+                const int i = l - group_first;
                 entries[i] = filtered[(i / kLanes) * out_plane + p + i % kLanes];
               }
             }

@@ -7,7 +7,10 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core/types.hpp>
+
 #include "gcpstereo/core/cost_volume.h"
+#include "gcpstereo/cost/cost_filter.h"
 
 namespace gcpstereo::cost::internal {
 
@@ -26,6 +29,15 @@ inline std::uint16_t Quantise(float cost, float inv_step) {
   if (!(q > 0.0f)) return 0;
   return q >= 65534.0f ? std::uint16_t{65534} : static_cast<std::uint16_t>(q);
 }
+
+// LabelBands' value of an entry outside the bands that has data: the largest cost.
+constexpr std::uint16_t kNotComputed = 65534;
+
+// The hull of the labels of `bands` (over `band_region`, image coordinates) within `margin` pixels
+// (Chebyshev distance) of each pixel of image row y, columns [x0, x0 + n): lo[c] … hi[c], lo > hi
+// where no block is that near.
+void BandsNear(const LabelBands& bands, const cv::Rect& band_region, int y, int x0, int n,
+               int margin, int* lo, int* hi);
 
 // The best_k aggregation of the plane sweep (RGB and ZNCC): per_neighbor holds the costs of
 // `width` entries for each neighbour ([neighbour][entry], +inf = the neighbour does not see it) and

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -622,6 +623,63 @@ std::string ExpansionResult::Summary() const {
     << ", moves tried/accepted/skipped " << moves_tried << "/" << moves_accepted << "/"
     << moves_skipped << ", " << time_seconds << " s";
   return s.str();
+}
+
+LabelBands CandidateLabelBands(const cv::Mat& prior, const cv::Mat& prior_weight, int num_labels,
+                               const ExpansionOptions& options,
+                               const EnergyOptions& energy_options, bool initial_labels_given) {
+  const bool weights_read_data =
+      energy_options.gcp_confidence > 0.0 ||
+      (energy_options.gcp_spread_gated && !prior_weight.empty());
+  if (options.candidate_labels != CandidateLabels::kPrior ||
+      options.initialization != Initialization::kPrior || initial_labels_given ||
+      options.candidate_min_confidence > 0.0 || !energy_options.use_gcp_energy || prior.empty() ||
+      weights_read_data) {
+    return {};
+  }
+  if (prior.type() != CV_32F) throw Error("CandidateLabelBands: the prior must be CV_32F");
+  const int block = options.candidate_block_px;
+  const int blocks_x = (prior.cols + block - 1) / block, blocks_y = (prior.rows + block - 1) / block;
+  LabelBands bands;
+  bands.block_px = block;
+  bands.lo.create(blocks_y, blocks_x, CV_32S);
+  bands.hi.create(blocks_y, blocks_x, CV_32S);
+  // The candidates (LocalCandidateBlocks) of a block without votes: ±radius around every D̂ and
+  // the start labels, D̂ rounded; one more label on each side for the refinement's parabola.
+  const int reach = options.candidate_radius + 1;
+  for (int by = 0; by < blocks_y; ++by) {
+    for (int bx = 0; bx < blocks_x; ++bx) {
+      float lowest = std::numeric_limits<float>::infinity();
+      float highest = -std::numeric_limits<float>::infinity();
+      bool complete = true;
+      for (int row = by * block; complete && row < std::min(prior.rows, (by + 1) * block); ++row) {
+        const float* p = prior.ptr<float>(row);
+        for (int col = bx * block; col < std::min(prior.cols, (bx + 1) * block); ++col) {
+          if (!std::isfinite(p[col])) {
+            complete = false;
+            break;
+          }
+          lowest = std::min(lowest, p[col]);
+          highest = std::max(highest, p[col]);
+        }
+      }
+      int lo = 0, hi = num_labels - 1;
+      if (complete) {
+        // A prior beyond the labels starts from the end label (clamped): it and its neighbour.
+        const float limit = 4.0f * static_cast<float>(num_labels) + 16.0f;
+        lowest = std::clamp(lowest, -limit, limit);
+        highest = std::clamp(highest, -limit, limit);
+        const int start_lo = std::clamp(static_cast<int>(std::lround(lowest)), 0, num_labels - 1);
+        const int start_hi = std::clamp(static_cast<int>(std::lround(highest)), 0, num_labels - 1);
+        lo = std::max(0, std::min(static_cast<int>(std::floor(lowest)) - reach, start_lo - 1));
+        hi = std::min(num_labels - 1,
+                      std::max(static_cast<int>(std::ceil(highest)) + reach, start_hi + 1));
+      }
+      bands.lo.at<int>(by, bx) = lo;
+      bands.hi.at<int>(by, bx) = hi;
+    }
+  }
+  return bands;
 }
 
 ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& energy_options,

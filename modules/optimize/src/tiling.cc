@@ -144,6 +144,7 @@ TiledResult OptimizeTiled(cv::Size image_size, const MakeTileProblem& make_probl
     report.region = region;
     const Timer setup_timer;
     OwnedMrfProblem owned = make_problem(region);
+    report.data_computed_share = owned.data_computed_share;
     if (energy_options.use_gcp_energy && !owned.prior.empty()) {
       // Eqs. (9)–(10): the data confidence's factors with the caller's spread factors ρ_p.
       owned.prior_weight = PriorWeights(owned.data, owned.prior_weight, energy_options);

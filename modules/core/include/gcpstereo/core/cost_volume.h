@@ -2,8 +2,10 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
 
 namespace gcpstereo {
@@ -59,6 +61,26 @@ class CostVolume {
   float max_cost_ = 0.0f;
   float cost_step_ = 0.0f;
   std::vector<std::uint16_t> data_;
+};
+
+// The labels a caller will read of a cost volume, per square block of the volume's region: block
+// (bx, by) covers the region's pixels [bx·block_px, (bx + 1)·block_px) × [by·block_px, (by + 1)·
+// block_px) (clipped), and its labels are lo(by, bx) … hi(by, bx), inclusive (lo > hi: none). A
+// volume computed with bands holds, inside them, exactly the entries of the full computation, and
+// outside them CostVolume::kNoData where the pixel has no data at that label and the largest cost
+// (65534 steps) elsewhere: not computed, as if the label were hopeless there. Empty bands (no
+// blocks) = every label everywhere. α-expansion over candidate labels (optimize::
+// CandidateLabelBands) knows its labels before the volume exists; most of a LiDAR frame's volume
+// is then never needed.
+struct LabelBands {
+  int block_px = 0;
+  cv::Mat lo, hi;  // CV_32S, ceil(height / block_px) × ceil(width / block_px)
+  bool empty() const { return lo.empty(); }
+  // Throws Error unless the bands are empty or fit a region of `size` (block_px > 0, both CV_32S
+  // of the block grid's size).
+  void CheckFits(const cv::Size& size, const std::string& what) const;
+  // The share of the region's (pixel, label) entries inside the bands, for num_labels labels.
+  double Fraction(const cv::Size& size, int num_labels) const;
 };
 
 }  // namespace gcpstereo

@@ -72,10 +72,12 @@ struct BirchfieldTomasiOptions {
 // truncation without census. Images: CV_8UC3 (BGR) or CV_8UC1, same type and size. Rows are
 // computed in parallel; the result does not depend on the thread count. Throws Error for bad
 // images, an empty disparity list, a non-finite disparity or a region outside `left`; ConfigError
-// for bad options.
+// for bad options. With `bands` (over `region`, see LabelBands), only the entries in them are
+// computed (and, with a window, the pixel costs within the filter's margin of them).
 CostVolume ComputeBirchfieldTomasiCost(const cv::Mat& left, const cv::Mat& right,
                                        const std::vector<double>& disparities_px,
                                        const cv::Rect& region,
-                                       const BirchfieldTomasiOptions& options = {});
+                                       const BirchfieldTomasiOptions& options = {},
+                                       const LabelBands* bands = nullptr);
 
 }  // namespace gcpstereo::cost

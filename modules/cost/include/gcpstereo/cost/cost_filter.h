@@ -62,8 +62,11 @@ struct CostFilterOptions {
 // the three channels are nearly equal — grey surfaces — Σ is nearly singular: on a 0 → 80 cost
 // step at a grey 40 → 200 edge, window 7, ε 1e-4, it is up to 0.61 off against 0.02 here.)
 // Throws Error when `region` is not inside raw.region() or the guide does not contain raw.region().
+// With `bands` (over `region`; see LabelBands), only the entries in them are filtered — `raw` needs
+// to hold the entries within MarginPx() of a block's pixels at the block's labels (others may be
+// anything but kNoData where there is data) — and the rest are set as LabelBands says.
 CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const cv::Rect& region,
-                            const CostFilterOptions& options);
+                            const CostFilterOptions& options, const LabelBands* bands = nullptr);
 
 // `region` grown by `margin_px` on every side and clipped to an image of `image_size`.
 cv::Rect GrowRegion(const cv::Rect& region, int margin_px, const cv::Size& image_size);

@@ -6,6 +6,7 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "gcpstereo/core/cost_volume.h"
 #include "gcpstereo/core/progress.h"
 #include "gcpstereo/optimize/energy.h"
 
@@ -98,6 +99,21 @@ struct ExpansionOptions {
 
   void Check() const;
 };
+
+// The labels of a problem's data term that AlphaExpansion with `options` and the sub-pixel
+// refinement after it (RefineSubLabel, which reads the labels next to each pixel's) can read, per
+// block of options.candidate_block_px pixels of the problem's region (the candidate sets' blocks),
+// known before the data term is computed. Only with candidate_labels prior, initialization prior,
+// no initial labelling, candidate_min_confidence 0, the GCP energy on with a prior, and GCP
+// weights that do not read the data (energy_options.gcp_confidence 0 and the spread not gated:
+// see PriorWeights): a block whose every pixel has a finite prior D̂ then reads
+// [⌊min D̂⌋ − candidate_radius − 1, ⌈max D̂⌉ + candidate_radius + 1] (clipped to the labels) and
+// any other block every label. Otherwise, empty bands: every label everywhere. `prior` and
+// `prior_weight` are the problem's (MrfProblem::prior, ::prior_weight); `initial_labels_given`
+// whether AlphaExpansion will be handed a start.
+LabelBands CandidateLabelBands(const cv::Mat& prior, const cv::Mat& prior_weight, int num_labels,
+                               const ExpansionOptions& options,
+                               const EnergyOptions& energy_options, bool initial_labels_given);
 
 struct ExpansionResult {
   cv::Mat labels;                         // CV_32S, region-sized

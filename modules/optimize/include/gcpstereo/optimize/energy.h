@@ -142,6 +142,9 @@ struct OwnedMrfProblem {
   cv::Mat image;         // CV_8UC3, region-sized
   cv::Mat prior;         // CV_32F, region-sized or empty
   cv::Mat prior_weight;  // CV_32F, region-sized or empty
+  // The share of the data term's (pixel, label) entries computed: below 1 when only the labels
+  // the solver can read were (CandidateLabelBands).
+  double data_computed_share = 1.0;
   MrfProblem View() const { return MrfProblem{&data, image, prior, prior_weight}; }
 };
 

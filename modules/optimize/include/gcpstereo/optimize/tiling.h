@@ -43,6 +43,7 @@ struct TileReport {
   ExpansionResult expansion;     // its labels are released after merging (empty)
   RefinementSummary refinement;  // when OptimizeTiled was asked to refine
   double setup_seconds = 0.0;    // time spent in make_problem (cost volume of the tile)
+  double data_computed_share = 1.0;  // OwnedMrfProblem::data_computed_share of the tile
 };
 
 struct TiledResult {
