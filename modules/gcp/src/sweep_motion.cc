@@ -2,6 +2,7 @@
 #include "gcpstereo/gcp/sweep_motion.h"
 
 #include <cmath>
+#include <vector>
 
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/kdtree/kdtree_flann.h>
@@ -110,19 +111,24 @@ ScanRegistrationSummary Register(const PointCloud& reference, const TimedScan& o
     }
     source_coarse = thinned;
   }
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree_coarse;
-  tree_coarse.setInputCloud(target_coarse);
-  Icp coarse_icp(source_coarse, target_coarse);
-
-  Fit best;
-  best.inlier_fraction = -1.0;  // any start beats it
-  for (const double speed : options.initial_speeds_mps) {
+  // The starts are independent: in parallel (each with its own ICP and k-d tree), the best
+  // taken in the starts' order, so the result does not depend on the threads.
+  const std::vector<double>& speeds = options.initial_speeds_mps;
+  std::vector<Fit> fits(speeds.size());
+  tbb::parallel_for(size_t{0}, speeds.size(), [&](size_t i) {
+    pcl::KdTreeFLANN<pcl::PointXYZ> tree_coarse;
+    tree_coarse.setInputCloud(target_coarse);
+    Icp coarse_icp(source_coarse, target_coarse);
     // The other scan's points seen from the reference pose: displaced by the distance driven.
     Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
-    guess(0, 3) = static_cast<float>(speed * other.seconds_after_reference);
+    guess(0, 3) = static_cast<float>(speeds[i] * other.seconds_after_reference);
     Eigen::Matrix4f coarse = coarse_icp.Align(guess, 5.0, 10);
     coarse = coarse_icp.Align(coarse, 1.5, 10);
-    const Fit fit = Score(*source_coarse, tree_coarse, coarse, 2.0 * options.inlier_distance);
+    fits[i] = Score(*source_coarse, tree_coarse, coarse, 2.0 * options.inlier_distance);
+  });
+  Fit best;
+  best.inlier_fraction = -1.0;  // any start beats it
+  for (const Fit& fit : fits) {
     if (fit.inlier_fraction > best.inlier_fraction) best = fit;
   }
 
