@@ -133,6 +133,11 @@ void WriteMeshObj(const std::string& path, const TriangleMesh& mesh,
   const std::size_t normal_pieces = pieces_of(normals.size());
   const std::size_t face_pieces = pieces_of(mesh.faces.size());
   std::vector<std::string> pieces(vertex_pieces + normal_pieces + face_pieces);
+  // A colour channel is one of 256 values: its text (" 0.356862754") formatted once.
+  std::vector<std::string> channel_text(has_colors ? 256 : 0);
+  for (std::size_t c = 0; c < channel_text.size(); ++c) {
+    AppendNumber(&channel_text[c], static_cast<float>(c) / 255.0f);
+  }
   auto format_vertices = [&](std::size_t begin, std::size_t end, std::string* text) {
     // Measured on a fountain-size mesh: 73 bytes per coloured vertex line (reserved a little
     // more, so that a piece is not reallocated).
@@ -141,7 +146,7 @@ void WriteMeshObj(const std::string& path, const TriangleMesh& mesh,
       *text += 'v';
       for (int k = 0; k < 3; ++k) AppendNumber(text, mesh.vertices[v][k]);
       if (has_colors) {
-        for (int k = 0; k < 3; ++k) AppendNumber(text, mesh.colors[v][k] / 255.0f);
+        for (int k = 0; k < 3; ++k) *text += channel_text[mesh.colors[v][k]];
       }
       *text += '\n';
     }
