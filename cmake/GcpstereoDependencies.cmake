@@ -14,6 +14,10 @@ find_package(assimp REQUIRED)
 find_package(SuiteSparse REQUIRED)          # cmake/FindSuiteSparse.cmake: 5.x ships no CMake package
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(MAXFLOW REQUIRED IMPORTED_TARGET maxflow)   # Boykov–Kolmogorov max-flow
+# FLANN's k-d tree is header templates (core/nearest_points.cc; libflann-dev comes with
+# libpcl-dev); its index-saving code, compiled with it, calls LZ4 (liblz4-dev, a dependency of
+# libflann-dev).
+pkg_check_modules(LZ4 REQUIRED IMPORTED_TARGET liblz4)
 # PCL (and through it VTK) is heavy: ask only for what is used (io: the point-cloud reader;
 # registration, filters, kdtree: the scan registration of gcp/sweep_motion.cc; surface: the
 # Poisson scene mesh of mesh/surface_reconstruction.cc), and link it privately to the libraries

@@ -9,6 +9,9 @@ packages=(
   libeigen3-dev libopencv-dev libpcl-dev libsuitesparse-dev libceres-dev libassimp-dev
   libyaml-cpp-dev libmaxflow-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # FLANN's k-d tree templates and the LZ4 they call (core/nearest_points.cc; libpcl-dev brings
+  # both, named here because the code includes them itself).
+  libflann-dev liblz4-dev
   # Optimised multi-threaded BLAS/LAPACK for CHOLMOD and Ceres (otherwise Debian may pick ATLAS
   # or the reference BLAS): CHOLMOD's 1536x1024 propagation solve 10.8 s -> 4.8 s.
   libopenblas0-pthread

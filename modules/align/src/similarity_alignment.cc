@@ -10,7 +10,6 @@
 #include <sstream>
 #include <utility>
 
-#include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <Eigen/Eigenvalues>
@@ -18,6 +17,7 @@
 #include <Eigen/SVD>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/core/nearest_points.h"
 
 namespace gcpstereo::align {
 namespace {
@@ -181,20 +181,16 @@ void FillStatistics(const std::vector<double>& residuals,
 
 // ---- Registration to a scan ---------------------------------------------------------------
 
-// A scan as PCL's k-d tree sees it.
+// A scan with its k-d tree (NearestPoints: the tree PCL builds, without its per-query OpenMP
+// region).
 class ScanIndex {
  public:
-  explicit ScanIndex(PclCloud::Ptr cloud) : cloud_(std::move(cloud)) {
-    tree_.setInputCloud(cloud_);
-  }
+  explicit ScanIndex(PclCloud::Ptr cloud) : cloud_(std::move(cloud)), tree_(Points(*cloud_)) {}
   // The nearest scan point to `x` and its distance.
   double Nearest(const Eigen::Vector3d& x, Eigen::Vector3d* nearest) const {
-    const pcl::PointXYZ query(static_cast<float>(x.x()), static_cast<float>(x.y()),
-                              static_cast<float>(x.z()));
-    if (tree_.nearestKSearch(query, 1, index_, distance2_) != 1) {
-      return std::numeric_limits<double>::infinity();
-    }
-    const pcl::PointXYZ& p = (*cloud_)[index_[0]];
+    const int i = NearestIndex(x);
+    if (i < 0) return std::numeric_limits<double>::infinity();
+    const pcl::PointXYZ& p = (*cloud_)[i];
     *nearest = Eigen::Vector3d(p.x, p.y, p.z);
     return (*nearest - x).norm();
   }
@@ -202,9 +198,9 @@ class ScanIndex {
 
   // The nearest scan point's index (-1 when none).
   int NearestIndex(const Eigen::Vector3d& x) const {
-    const pcl::PointXYZ query(static_cast<float>(x.x()), static_cast<float>(x.y()),
-                              static_cast<float>(x.z()));
-    return tree_.nearestKSearch(query, 1, index_, distance2_) == 1 ? index_[0] : -1;
+    int index = -1;
+    float distance2 = 0.0f;
+    return tree_.Nearest(x.cast<float>(), 1, &index, &distance2) == 1 ? index : -1;
   }
   Eigen::Vector3d Point(int i) const {
     const pcl::PointXYZ& p = (*cloud_)[i];
@@ -216,11 +212,12 @@ class ScanIndex {
     if (normals_.empty()) normals_.assign(cloud_->size(), Eigen::Vector3f::Constant(NAN));
     Eigen::Vector3f& n = normals_[i];
     if (std::isnan(n.x())) {
-      std::vector<int> neighbours;
-      std::vector<float> distances;
-      tree_.nearestKSearch((*cloud_)[i], kNormalNeighbours, neighbours, distances);
+      int neighbours[kNormalNeighbours];
+      float distances[kNormalNeighbours];
+      const int found =
+          tree_.Nearest(Point(i).cast<float>(), kNormalNeighbours, neighbours, distances);
       std::vector<Eigen::Vector3d> points;
-      for (int k : neighbours) points.push_back(Point(k));
+      for (int k = 0; k < found; ++k) points.push_back(Point(neighbours[k]));
       n.setZero();
       if (points.size() >= 3) {
         Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -239,10 +236,14 @@ class ScanIndex {
 
  private:
   static constexpr int kNormalNeighbours = 12;
+  static std::vector<Eigen::Vector3f> Points(const PclCloud& cloud) {
+    std::vector<Eigen::Vector3f> points;
+    points.reserve(cloud.size());
+    for (const pcl::PointXYZ& p : cloud.points) points.emplace_back(p.x, p.y, p.z);
+    return points;
+  }
   PclCloud::Ptr cloud_;
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree_;
-  mutable std::vector<int> index_ = std::vector<int>(1);
-  mutable std::vector<float> distance2_ = std::vector<float>(1);
+  NearestPoints tree_;
   mutable std::vector<Eigen::Vector3f> normals_;
 };
 

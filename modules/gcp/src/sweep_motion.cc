@@ -5,13 +5,6 @@
 #include <memory>
 #include <vector>
 
-// FLANN's templates compiled here without OpenMP (see SerialKdTree): its `#pragma omp` lines
-// are left out, and GCC's warning about them with them.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wunknown-pragmas"
-#include <flann/algorithms/dist.h>
-#include <flann/algorithms/kdtree_single_index.h>
-#pragma GCC diagnostic pop
 #include <pcl/common/point_tests.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/search/kdtree.h>
@@ -22,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/core/nearest_points.h"
 
 namespace gcpstereo::gcp {
 namespace {
@@ -50,13 +44,10 @@ PclCloud::Ptr ForRegistration(const PointCloud& scan, const ScanRegistrationOpti
   return filtered;
 }
 
-// pcl::search::KdTree whose nearest-neighbour queries go to a FLANN k-d tree compiled here,
-// without OpenMP. Debian's libpcl_kdtree runs FLANN with OpenMP, which opens a parallel region
-// (two futex system calls) for every single-point query, and ICP asks one query per point and
-// iteration: that was two thirds of a scan registration's time (measured on KITTI frame 20:
-// 1.2 M futex calls for 0.6 M queries in a stand-alone loop). The tree is the one
-// pcl::KdTreeFLANN builds (a single k-d tree, leaves of 15 points, the finite points in order)
-// and the search is exact, so the neighbours are the same.
+// pcl::search::KdTree answering its nearest-neighbour queries with NearestPoints: the same tree
+// and exact search as PCL's, without the OpenMP region Debian's PCL opens for every query (ICP
+// asks one per point and iteration: two thirds of a registration's time went there; KITTI frame
+// 20's two registrations 0.78 → 0.29 s, the same results).
 class SerialKdTree : public pcl::search::KdTree<pcl::PointXYZ> {
  public:
   using pcl::search::KdTree<pcl::PointXYZ>::nearestKSearch;
@@ -65,40 +56,31 @@ class SerialKdTree : public pcl::search::KdTree<pcl::PointXYZ> {
                      const pcl::IndicesConstPtr& indices = pcl::IndicesConstPtr()) override {
     input_ = cloud;
     indices_ = indices;
-    coordinates_.clear();
-    mapping_.clear();
+    std::vector<Eigen::Vector3f> points;
+    cloud_index_.clear();
     auto add = [&](int i) {
       const pcl::PointXYZ& p = (*cloud)[i];
-      if (!pcl::isFinite(p)) return;
-      coordinates_.insert(coordinates_.end(), {p.x, p.y, p.z});
-      mapping_.push_back(i);
+      points.emplace_back(p.x, p.y, p.z);
+      cloud_index_.push_back(i);
     };
     if (indices != nullptr) {
       for (const int i : *indices) add(i);
     } else {
       for (int i = 0; i < static_cast<int>(cloud->size()); ++i) add(i);
     }
-    index_.reset();
-    if (mapping_.empty()) return;
-    index_ = std::make_unique<Index>(
-        flann::Matrix<float>(coordinates_.data(), mapping_.size(), 3),
-        flann::KDTreeSingleIndexParams(15));
-    index_->buildIndex();
+    nearest_ = NearestPoints(points);
   }
 
   int nearestKSearch(const pcl::PointXYZ& point, int k, pcl::Indices& k_indices,
                      std::vector<float>& k_sqr_distances) const override {
-    k = std::min(k, static_cast<int>(mapping_.size()));
     k_indices.resize(std::max(k, 0));
     k_sqr_distances.resize(std::max(k, 0));
-    if (k <= 0 || !pcl::isFinite(point)) return 0;
-    float query[3] = {point.x, point.y, point.z};
-    flann::Matrix<int> indices(k_indices.data(), 1, k);
-    flann::Matrix<float> distances(k_sqr_distances.data(), 1, k);
-    index_->knnSearch(flann::Matrix<float>(query, 1, 3), indices, distances, k,
-                      flann::SearchParams(-1, 0.0f));
-    for (int& i : k_indices) i = mapping_[i];
-    return k;
+    const int found = nearest_.Nearest(Eigen::Vector3f(point.x, point.y, point.z), k,
+                                       k_indices.data(), k_sqr_distances.data());
+    k_indices.resize(found);
+    k_sqr_distances.resize(found);
+    for (int& i : k_indices) i = cloud_index_[i];
+    return found;
   }
 
   int radiusSearch(const pcl::PointXYZ&, double, pcl::Indices&, std::vector<float>&,
@@ -107,10 +89,8 @@ class SerialKdTree : public pcl::search::KdTree<pcl::PointXYZ> {
   }
 
  private:
-  using Index = flann::KDTreeSingleIndex<flann::L2_Simple<float>>;
-  std::vector<float> coordinates_;
-  std::vector<int> mapping_;
-  std::unique_ptr<Index> index_;
+  NearestPoints nearest_;
+  std::vector<int> cloud_index_;  // the cloud's index of each point given to nearest_
 };
 
 // A tree over `cloud`.

@@ -3,7 +3,7 @@
 // Scene mesh from the fused oriented cloud: screened Poisson (Kazhdan & Hoppe, ACM ToG 32(3)
 // 2013, eq. 4; PCL 1.13's pcl::Poisson, which ships Kazhdan's PoissonRecon with the screening
 // weight as setPointWeight), then trimming by the distance to the input points and colours from
-// the nearest input point (PCL's KdTreeFLANN). See surface_reconstruction.h for the energy.
+// the nearest input point (core/nearest_points.h). See surface_reconstruction.h for the energy.
 //
 // Deliberate deviations from PoissonRecon's own tool: no density-based trimming (PCL does not
 // return the sampling density per vertex), a distance-based one instead; num_views and sigma do
@@ -64,7 +64,6 @@
 #include <sstream>
 #include <vector>
 
-#include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/surface/poisson.h>
@@ -75,6 +74,7 @@
 
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
+#include "gcpstereo/core/nearest_points.h"
 #include "gcpstereo/core/system.h"
 
 namespace gcpstereo::mesh {
@@ -185,18 +185,19 @@ void ParallelFor(size_t n, int threads, const Body& body) {
   });
 }
 
-double MedianSpacing(const pcl::KdTreeFLANN<pcl::PointXYZ>& tree,
-                     const pcl::PointCloud<pcl::PointXYZ>& points, int threads) {
+double MedianSpacing(const NearestPoints& tree, const pcl::PointCloud<pcl::PointXYZ>& points,
+                     int threads) {
   if (points.size() < 2) return 0.0;
   const size_t step = std::max<size_t>(1, points.size() / kSpacingSamples);
   const size_t samples = (points.size() + step - 1) / step;
   std::vector<float> spacing(samples, 0.0f);
   ParallelFor(samples, threads, [&](size_t begin, size_t end) {
-    std::vector<int> index(2);
-    std::vector<float> squared(2);
+    int index[2];
+    float squared[2];
     for (size_t i = begin; i < end; ++i) {
       // k = 2: the point itself and its nearest neighbour (0 for duplicates).
-      if (tree.nearestKSearch(points[i * step], 2, index, squared) == 2) {
+      const pcl::PointXYZ& p = points[i * step];
+      if (tree.Nearest(Eigen::Vector3f(p.x, p.y, p.z), 2, index, squared) == 2) {
         spacing[i] = std::sqrt(squared[1]);
       }
     }
@@ -308,19 +309,22 @@ TriangleMesh ReconstructSurface(const OrientedPointCloud& cloud, const SurfaceOp
   }
 
   // Nearest input point of every Poisson vertex: its colour and its distance for the trim.
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-  tree.setInputCloud(positions);
+  // (NearestPoints: PCL's tree without its per-query OpenMP region.)
+  std::vector<Eigen::Vector3f> input_points;
+  input_points.reserve(positions->size());
+  for (const pcl::PointXYZ& p : positions->points) input_points.emplace_back(p.x, p.y, p.z);
+  const NearestPoints tree(input_points);
   const size_t poisson_vertices = poisson_points.size();
   std::vector<int> nearest(poisson_vertices, 0);
   std::vector<float> nearest_distance(poisson_vertices, 0.0f);
   ParallelFor(poisson_vertices, options.threads, [&](size_t begin, size_t end) {
-    std::vector<int> index(1);
-    std::vector<float> squared(1);
+    int index = 0;
+    float squared = 0.0f;
     for (size_t v = begin; v < end; ++v) {
       const pcl::PointNormal& p = poisson_points[v];
-      tree.nearestKSearch(pcl::PointXYZ(p.x, p.y, p.z), 1, index, squared);
-      nearest[v] = index[0];
-      nearest_distance[v] = std::sqrt(squared[0]);
+      tree.Nearest(Eigen::Vector3f(p.x, p.y, p.z), 1, &index, &squared);
+      nearest[v] = index;
+      nearest_distance[v] = std::sqrt(squared);
     }
   });
 
