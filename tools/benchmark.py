@@ -338,6 +338,9 @@ class Runner:
             raise BenchError("no %s written" % product)
         with open(stamp, "w") as f:
             json.dump(command, f)
+        # The whole process's wall time (start-up, dynamic linking and exit included).
+        with open(os.path.join(folder, "bench_seconds.json"), "w") as f:
+            json.dump(elapsed, f)
         self.done[key] = command
         self.log("done    %s (%s)" % (key, fmt_seconds(elapsed)))
         return product_path
@@ -1152,6 +1155,9 @@ def combined(runs):
     out.update(runs[0][1])
     out["total_seconds_each"] = [s["total_seconds"] for s in summaries]
     out["total_seconds"] = statistics.median(out["total_seconds_each"])
+    if all("process_seconds" in s for s in summaries):
+        out["process_seconds_each"] = [s["process_seconds"] for s in summaries]
+        out["process_seconds"] = statistics.median(out["process_seconds_each"])
     stages = [s.get("stages", {}) for s in summaries]
     out["stages"] = {name: statistics.median(st.get(name) or 0.0 for st in stages)
                      for name in stages[0]}
@@ -1189,8 +1195,13 @@ def suite_speed(runner, baseline, scenes, frames, include_fountain, include_synt
 
                 def once():
                     items = sets() if callable(sets) else sets
-                    report, _ = r.run("%s%s/run%d" % (prefix, what, i), config, items)
-                    runs[build].append((run_summary(report), accuracy(report)))
+                    report, folder = r.run("%s%s/run%d" % (prefix, what, i), config, items)
+                    summary = run_summary(report)
+                    elapsed = os.path.join(folder, "bench_seconds.json")
+                    if os.path.exists(elapsed):
+                        with open(elapsed) as f:
+                            summary["process_seconds"] = json.load(f)
+                    runs[build].append((summary, accuracy(report)))
                     return {}
                 measure(row, build, once)
         for build, _ in builds:
@@ -1269,7 +1280,10 @@ def suite_speed(runner, baseline, scenes, frames, include_fountain, include_synt
           "Each gcpstereo run %s; times are the median of %d run%s (per stage and total), peak "
           "memory the largest (report.json `peak_memory_bytes`), accuracy the first run's. "
           "Stage columns in seconds, in pipeline order; `untimed` = total − the stages (label "
-          "choice, depth maps, mesh building, report). SGBM = gcpstereo_sgbm_baseline on the "
+          "choice, depth maps, mesh building, report); `total` = report.json's total_seconds "
+          "(from the command's start to the report), `process` = the whole process's wall time "
+          "(start-up, loading the shared libraries and exit included), which the targets are "
+          "checked against. SGBM = gcpstereo_sgbm_baseline on the "
           "same rectified pair, timed around compute() only (as endtoend); × SGBM = gcpstereo "
           "total / SGBM time. Load average when the suite began: %s%s." % (
               "by this build (%s)" % runner.build if not baseline else
@@ -1303,7 +1317,7 @@ def speed_table(kind, rows, accuracy, with_baseline, target_of):
               sorted(s for s in stages if s not in STAGE_ORDER))
     has_sgbm = any("sgbm" in row for row in rows.values())
     header = (["data set"] + (["build"] if with_baseline else []) + ["size", "labels"] + stages +
-              ["untimed", "total s", "peak MB"] + [h for h, _ in accuracy] +
+              ["untimed", "total s", "process s", "peak MB"] + [h for h, _ in accuracy] +
               (["SGBM s", "× SGBM"] if has_sgbm else []) + ["target"] +
               (["after/before"] if with_baseline else []))
     lines = ["| " + " | ".join(header) + " |",
@@ -1322,7 +1336,7 @@ def speed_table(kind, rows, accuracy, with_baseline, target_of):
             cells += ["%.2f" % m["stages"][s] if s in m.get("stages", {}) else "" for s in stages]
             peak = m.get("peak_memory_bytes")
             cells += [cell(m, "untimed_seconds"), cell(m, "total_seconds"),
-                      "%.0f" % (peak / 1e6) if peak else ""]
+                      cell(m, "process_seconds"), "%.0f" % (peak / 1e6) if peak else ""]
             cells += [cell(m, key) for _, key in accuracy]
             if has_sgbm:
                 if "error" in sgbm:
@@ -1350,7 +1364,8 @@ def target_cell(m, target):
         return ""
     seconds, memory = target
     missed = []
-    if m["total_seconds"] > seconds:
+    # The wall time a user waits: the whole process's when measured.
+    if m.get("process_seconds", m["total_seconds"]) > seconds:
         missed.append("time")
     peak = m.get("peak_memory_bytes")
     if memory is not None and (peak is None or peak > memory):

@@ -533,16 +533,12 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count,
   }
 }
 
-// Sets the entries of one pixel's labels [first, first + count) outside its band [lo, hi] as
-// LabelBands says: kNoData where `raw_entries` has none, kNotComputed elsewhere.
-inline void ClearOutsideBand(const std::uint16_t* raw_entries, int first, int count, int lo, int hi,
-                             std::uint16_t* entries) {
+// Sets the entries of one pixel's labels [first, first + count) outside its band [lo, hi] to the
+// largest cost (LabelBands: not computed).
+inline void ClearOutsideBand(int first, int count, int lo, int hi, std::uint16_t* entries) {
   for (int i = 0; i < count; ++i) {
     const int l = first + i;
-    if (l < lo || l > hi) {
-      entries[i] = raw_entries[i] == CostVolume::kNoData ? CostVolume::kNoData
-                                                          : internal::kNotComputed;
-    }
+    if (l < lo || l > hi) entries[i] = internal::kNotComputed;
   }
 }
 
@@ -587,7 +583,7 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
         std::copy_n(entries, num_labels, dst);
         int lo = 0, hi = 0;
         band_of(r, c, &lo, &hi);
-        ClearOutsideBand(entries, 0, num_labels, lo, hi, dst);
+        ClearOutsideBand(0, num_labels, lo, hi, dst);
       }
     }
     return out;
@@ -699,8 +695,7 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
               lo = std::max(lo, group_first);
               hi = std::min(hi, group_last);
               if (lo > group_first || hi < group_last) {
-                ClearOutsideBand(raw.PixelData(oy + y, x) + group_first, group_first, group_count,
-                                 lo, hi, entries);
+                ClearOutsideBand(group_first, group_count, lo, hi, entries);
               }
               if (lo > hi) continue;
               const std::size_t p =

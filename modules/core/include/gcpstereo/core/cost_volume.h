@@ -67,8 +67,8 @@ class CostVolume {
 // (bx, by) covers the region's pixels [bx·block_px, (bx + 1)·block_px) × [by·block_px, (by + 1)·
 // block_px) (clipped), and its labels are lo(by, bx) … hi(by, bx), inclusive (lo > hi: none). A
 // volume computed with bands holds, inside them, exactly the entries of the full computation, and
-// outside them CostVolume::kNoData where the pixel has no data at that label and the largest cost
-// (65534 steps) elsewhere: not computed, as if the label were hopeless there. Empty bands (no
+// outside them the largest cost — 65534 steps, or kNoData, which reads as the largest cost too —
+// not computed, as if the label were hopeless there. Empty bands (no
 // blocks) = every label everywhere. α-expansion over candidate labels (optimize::
 // CandidateLabelBands) knows its labels before the volume exists; most of a LiDAR frame's volume
 // is then never needed.

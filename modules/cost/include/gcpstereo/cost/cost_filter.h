@@ -64,7 +64,8 @@ struct CostFilterOptions {
 // Throws Error when `region` is not inside raw.region() or the guide does not contain raw.region().
 // With `bands` (over `region`; see LabelBands), only the entries in them are filtered — `raw` needs
 // to hold the entries within MarginPx() of a block's pixels at the block's labels (others may be
-// anything but kNoData where there is data) — and the rest are set as LabelBands says.
+// anything but kNoData where there is data, and must be kNoData where there is none) — and the
+// rest are set to the largest cost (65534 steps).
 CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const cv::Rect& region,
                             const CostFilterOptions& options, const LabelBands* bands = nullptr);
 
