@@ -48,16 +48,18 @@ Suites
             (configs/middlebury_stereo.yaml with the GCP energy; bad-1 nonocc / all; the <= 2 s
             target on teddy, or on Aloe when teddy's data is absent), fountain-P11 view 0005 as
             configs/fountain_p11.yaml ships it and the synthetic fountain's view 0005 (within
-            3 sigma); per-stage seconds in pipeline order, total, peak memory, accuracy, OpenCV
-            SGBM's time on the same pair and the ratio, the issue's targets met or not.
+            3 sigma); per-stage seconds in pipeline order, total (report.json) and the whole
+            process's wall time (start-up and exit included; the targets are checked on it),
+            peak memory, accuracy, OpenCV SGBM's time on the same pair and the ratio, the
+            issue's targets met or not.
             --repeat N: every timed run N times (median time, largest peak memory);
             --baseline-build DIR: every gcpstereo run also with DIR's program (runs under
             OUT/runs/speed/baseline/), the tables show after, before and after/before;
             --baseline-configs DIR: the baseline runs DIR's configuration files (an older
             commit's configs/) instead of this checkout's.
             Not part of 'all': it times endtoend's runs again, about 4-5 minutes per build and
-            repetition on 2 cores (measured on an idle machine: a KITTI frame 3.5-4.5 s, Aloe
-            8.5 s, the fountain-P11 view 1 min, the synthetic fountain view 46 s).
+            repetition on 2 cores (measured on an idle machine: a KITTI frame 2.2-2.8 s, Aloe
+            7-8.5 s, the fountain-P11 view 1 min, the synthetic fountain view 46 s).
             Other work on the machine moves these times by a factor up to 2: compare builds in
             one invocation (--baseline-build), whose runs take turns.
 
