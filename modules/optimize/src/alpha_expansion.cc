@@ -625,16 +625,24 @@ std::string ExpansionResult::Summary() const {
   return s.str();
 }
 
+namespace {
+
+// Initialization::kPrior's start label of a pixel with a finite prior: D̂ rounded, clamped to the
+// labels (the prior clamped first, so that a far-off D̂ does not overflow the rounding).
+int PriorStartLabel(float prior, int num_labels) {
+  const float clamped = std::clamp(prior, -1.0f, static_cast<float>(num_labels));
+  return std::clamp(static_cast<int>(std::lround(clamped)), 0, num_labels - 1);
+}
+
+}  // namespace
+
 LabelBands CandidateLabelBands(const cv::Mat& prior, const cv::Mat& prior_weight, int num_labels,
                                const ExpansionOptions& options,
                                const EnergyOptions& energy_options, bool initial_labels_given) {
-  const bool weights_read_data =
-      energy_options.gcp_confidence > 0.0 ||
-      (energy_options.gcp_spread_gated && !prior_weight.empty());
   if (options.candidate_labels != CandidateLabels::kPrior ||
       options.initialization != Initialization::kPrior || initial_labels_given ||
       options.candidate_min_confidence > 0.0 || !energy_options.use_gcp_energy || prior.empty() ||
-      weights_read_data) {
+      PriorWeightsReadData(prior_weight, energy_options)) {
     return {};
   }
   if (prior.type() != CV_32F) throw Error("CandidateLabelBands: the prior must be CV_32F");
@@ -665,12 +673,12 @@ LabelBands CandidateLabelBands(const cv::Mat& prior, const cv::Mat& prior_weight
       }
       int lo = 0, hi = num_labels - 1;
       if (complete) {
-        // A prior beyond the labels starts from the end label (clamped): it and its neighbour.
+        // A prior beyond the labels starts from the end label: it and its neighbour.
         const float limit = 4.0f * static_cast<float>(num_labels) + 16.0f;
         lowest = std::clamp(lowest, -limit, limit);
         highest = std::clamp(highest, -limit, limit);
-        const int start_lo = std::clamp(static_cast<int>(std::lround(lowest)), 0, num_labels - 1);
-        const int start_hi = std::clamp(static_cast<int>(std::lround(highest)), 0, num_labels - 1);
+        const int start_lo = PriorStartLabel(lowest, num_labels);
+        const int start_hi = PriorStartLabel(highest, num_labels);
         lo = std::max(0, std::min(static_cast<int>(std::floor(lowest)) - reach, start_lo - 1));
         hi = std::min(num_labels - 1,
                       std::max(static_cast<int>(std::ceil(highest)) + reach, start_hi + 1));
@@ -712,8 +720,7 @@ ExpansionResult AlphaExpansion(const MrfProblem& problem, const EnergyOptions& e
         for (int col = 0; col < labels.cols; ++col) {
           const float prior = problem.prior.ptr<float>(row)[col];
           if (std::isfinite(prior)) {
-            labels.ptr<int>(row)[col] =
-                std::clamp(static_cast<int>(std::lround(prior)), 0, num_labels - 1);
+            labels.ptr<int>(row)[col] = PriorStartLabel(prior, num_labels);
           }
         }
       }

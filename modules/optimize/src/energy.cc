@@ -89,10 +89,14 @@ double GcpPenalty(double label, double prior_label, const EnergyOptions& options
   return -std::log((1.0 - eta) * std::exp(-std::abs(label - prior_label) / options.gamma_d) + eta);
 }
 
+bool PriorWeightsReadData(const cv::Mat& spread_weights, const EnergyOptions& options) {
+  return options.gcp_confidence > 0.0 || (options.gcp_spread_gated && !spread_weights.empty());
+}
+
 cv::Mat PriorWeights(const CostVolume& data, const cv::Mat& spread_weights,
                      const EnergyOptions& options) {
+  if (!PriorWeightsReadData(spread_weights, options)) return spread_weights;
   const bool gated = options.gcp_spread_gated && !spread_weights.empty();
-  if (options.gcp_confidence <= 0.0 && !gated) return spread_weights;
   const cv::Mat confidence = cost::PeakRatioConfidence(data, options.gcp_confidence_radius);
   cv::Mat weights;
   if (spread_weights.empty()) {

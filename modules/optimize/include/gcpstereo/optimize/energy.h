@@ -161,6 +161,9 @@ double PairWeight(const cv::Vec3b& color_p, const cv::Vec3b& color_q, const Ener
 // Ψ(x, y) of eq. (7) (without λr); x, y in label steps.
 double GcpPenalty(double label, double prior_label, const EnergyOptions& options);
 
+// Whether PriorWeights reads the data term for these spread factors (the data confidence c_p:
+// gcp_confidence > 0, or the spread gated by it); otherwise it returns `spread_weights` as given.
+bool PriorWeightsReadData(const cv::Mat& spread_weights, const EnergyOptions& options);
 // ω_p of eq. (9) for one problem's costs (CV_32F, region-sized), from the spread factors ρ_p of
 // eq. (10) for the same region (CV_32F, or empty for none): (1 − β·c_p)·ρ'_p, c_p
 // cost::PeakRatioConfidence over gcp_confidence_radius. Returns `spread_weights` itself when no
