@@ -87,7 +87,9 @@ TEST(StereoGcpsTest, SyntheticPairGivesCorrectSparseGcps) {
 // The adaptive-weight evidence against the Yoon–Kweon cost evaluated pixel by pixel and
 // disparity by disparity (CIELab weights of both windows, truncated RGB differences, the window
 // sampled every aw_stride_px): same WTA, same uniqueness, same parabola vertex, near the image
-// borders (where windows leave the image) and in the interior, for strides 1 and 2.
+// borders (where windows leave the image) and in the interior, for strides 1 and 2, in the left
+// view (partner x − d) and in the right view (partner x + d). Rows of 29 px: the 16-px blocks of
+// the vectorised sums and their scalar tails both take part.
 TEST(StereoGcpsTest, AdaptiveWeightEvidenceIsThePerPixelFormula) {
   std::mt19937 rng(23);
   std::uniform_int_distribution<int> value(0, 255);
@@ -118,7 +120,6 @@ TEST(StereoGcpsTest, AdaptiveWeightEvidenceIsThePerPixelFormula) {
     options.aw_window_px = 9;
     options.aw_stride_px = stride;
     const StereoPairEvidence evidence = ComputeStereoEvidence(left, right, dmin, dmax, options);
-    const StereoViewEvidence& e = evidence.left;
     const int radius = 4, reach = (radius / stride) * stride;
     auto weight = [&](const cv::Mat& image_lab, int y, int x, int dy, int dx) -> float {
       const int qy = y + dy, qx = x + dx;
@@ -127,58 +128,71 @@ TEST(StereoGcpsTest, AdaptiveWeightEvidenceIsThePerPixelFormula) {
       return std::exp(-std::sqrt(diff.dot(diff)) * static_cast<float>(1.0 / options.aw_gamma_c)) *
              static_cast<float>(std::exp(-std::hypot(dx, dy) / options.aw_gamma_p));
     };
-    int compared = 0;
-    for (int y = 0; y < left.rows; ++y) {
-      for (int x = 0; x < left.cols; ++x) {
-        std::vector<double> cost;
-        std::vector<int> disparity;
-        for (int d = dmin; d <= dmax; ++d) {
-          if (x - d < 0) continue;
-          double numerator = 0.0, denominator = 0.0;
-          for (int dy = -reach; dy <= radius; dy += stride) {
-            for (int dx = -reach; dx <= radius; dx += stride) {
-              const float w = weight(lab_l, y, x, dy, dx) * weight(lab_r, y, x - d, dy, dx);
-              if (w == 0.0f) continue;
-              const int qy = y + dy, qx = x + dx;
-              float diff = -1.0f;  // the target pixel qx − d is outside the image
-              if (qx - d >= 0) {
-                const cv::Vec3b a = left.at<cv::Vec3b>(qy, qx), b = right.at<cv::Vec3b>(qy, qx - d);
-                diff = std::min(static_cast<float>(std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) +
-                                                   std::abs(a[2] - b[2])),
-                                static_cast<float>(options.aw_truncation));
+    // The view's own image is `ref`, its partner `other`; its partner pixel is x − d (left view,
+    // sign −1) or x + d (right view, sign +1).
+    for (const int sign : {-1, 1}) {
+      const StereoViewEvidence& e = sign < 0 ? evidence.left : evidence.right;
+      const cv::Mat& ref = sign < 0 ? left : right;
+      const cv::Mat& other = sign < 0 ? right : left;
+      const cv::Mat& lab_ref = sign < 0 ? lab_l : lab_r;
+      const cv::Mat& lab_other = sign < 0 ? lab_r : lab_l;
+      int compared = 0;
+      for (int y = 0; y < ref.rows; ++y) {
+        for (int x = 0; x < ref.cols; ++x) {
+          std::vector<double> cost;
+          std::vector<int> disparity;
+          for (int d = dmin; d <= dmax; ++d) {
+            const int xp = x + sign * d;
+            if (xp < 0 || xp >= ref.cols) continue;
+            double numerator = 0.0, denominator = 0.0;
+            for (int dy = -reach; dy <= radius; dy += stride) {
+              for (int dx = -reach; dx <= radius; dx += stride) {
+                const float w = weight(lab_ref, y, x, dy, dx) * weight(lab_other, y, xp, dy, dx);
+                if (w == 0.0f) continue;
+                const int qy = y + dy, qx = x + dx, qxp = xp + dx;
+                float diff = -1.0f;  // the partner pixel qxp is outside the image
+                if (qxp >= 0 && qxp < ref.cols) {
+                  const cv::Vec3b a = ref.at<cv::Vec3b>(qy, qx), b = other.at<cv::Vec3b>(qy, qxp);
+                  diff = std::min(static_cast<float>(std::abs(a[0] - b[0]) +
+                                                     std::abs(a[1] - b[1]) + std::abs(a[2] - b[2])),
+                                  static_cast<float>(options.aw_truncation));
+                }
+                numerator += w * diff;
+                denominator += w;
               }
-              numerator += w * diff;
-              denominator += w;
             }
+            if (denominator <= 0.0) continue;
+            cost.push_back(numerator / denominator);
+            disparity.push_back(d);
           }
-          if (denominator <= 0.0) continue;
-          cost.push_back(numerator / denominator);
-          disparity.push_back(d);
+          ASSERT_FALSE(cost.empty());
+          const int best =
+              static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+          EXPECT_EQ(e.wta_aw.at<int>(y, x), disparity[best])
+              << "view " << sign << " stride " << stride << " at " << x << "," << y;
+          double second = std::numeric_limits<double>::infinity();
+          for (std::size_t i = 0; i < cost.size(); ++i) {
+            if (std::abs(disparity[i] - disparity[best]) > 1) second = std::min(second, cost[i]);
+          }
+          const double u =
+              std::isfinite(second) && second > 0.0 ? (second - cost[best]) / second : 0.0;
+          EXPECT_NEAR(e.uniqueness_aw.at<float>(y, x), u, 1e-6)
+              << "view " << sign << " at " << x << "," << y;
+          if (best > 0 && best + 1 < static_cast<int>(cost.size()) &&
+              cost[best - 1] - 2.0 * cost[best] + cost[best + 1] > 0.0) {
+            const double vertex =
+                disparity[best] +
+                std::clamp(0.5 * (cost[best - 1] - cost[best + 1]) /
+                               (cost[best - 1] - 2.0 * cost[best] + cost[best + 1]),
+                           -0.5, 0.5);
+            EXPECT_NEAR(e.subpixel_aw.at<float>(y, x), vertex, 1e-5)
+                << "view " << sign << " at " << x << "," << y;
+          }
+          ++compared;
         }
-        ASSERT_FALSE(cost.empty());
-        const int best =
-            static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
-        EXPECT_EQ(e.wta_aw.at<int>(y, x), disparity[best])
-            << "stride " << stride << " at " << x << "," << y;
-        double second = std::numeric_limits<double>::infinity();
-        for (std::size_t i = 0; i < cost.size(); ++i) {
-          if (std::abs(disparity[i] - disparity[best]) > 1) second = std::min(second, cost[i]);
-        }
-        const double u =
-            std::isfinite(second) && second > 0.0 ? (second - cost[best]) / second : 0.0;
-        EXPECT_NEAR(e.uniqueness_aw.at<float>(y, x), u, 1e-6) << "at " << x << "," << y;
-        if (best > 0 && best + 1 < static_cast<int>(cost.size()) &&
-            cost[best - 1] - 2.0 * cost[best] + cost[best + 1] > 0.0) {
-          const double vertex =
-              disparity[best] + std::clamp(0.5 * (cost[best - 1] - cost[best + 1]) /
-                                               (cost[best - 1] - 2.0 * cost[best] + cost[best + 1]),
-                                           -0.5, 0.5);
-          EXPECT_NEAR(e.subpixel_aw.at<float>(y, x), vertex, 1e-5) << "at " << x << "," << y;
-        }
-        ++compared;
       }
+      EXPECT_EQ(compared, ref.rows * ref.cols);
     }
-    EXPECT_EQ(compared, left.rows * left.cols);
   }
 }
 

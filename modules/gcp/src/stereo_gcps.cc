@@ -5,8 +5,11 @@
 //  * Birchfield–Tomasi [3]: the cost module's volume (no aggregation, integer disparities).
 //  * NCC over an n×n RGB patch with box filters in double precision (sums of squares of 75 values
 //    up to 255² lose digits in float).
-//  * Yoon–Kweon adaptive support weights, exact formula, window sampled every aw_stride_px.
+//  * Yoon–Kweon adaptive support weights, exact formula, window sampled every aw_stride_px: in
+//    adaptive_weights.cc, both views at once.
 #include "gcpstereo/gcp/stereo_gcps.h"
+
+#include "adaptive_weights.h"
 
 #include "gcpstereo/cost/birchfield_tomasi.h"
 #include "gcpstereo/cost/winner_take_all.h"
@@ -22,6 +25,7 @@
 #include <vector>
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_for.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -30,17 +34,6 @@
 
 namespace gcpstereo::gcp {
 namespace {
-
-// Uniqueness u = (c₂ − c₁) / c₂ of a cost curve: c₁ = cost[best], c₂ the lowest cost among the
-// valid entries more than 1 px from best. 0 when there is no such entry or c₂ <= 0.
-float UniquenessOfCurve(const double* cost, const bool* valid, int count, int best) {
-  double c2 = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < count; ++i) {
-    if (valid[i] && std::abs(i - best) > 1) c2 = std::min(c2, cost[i]);
-  }
-  if (!std::isfinite(c2) || c2 <= 0.0) return 0.0f;
-  return static_cast<float>(std::max(0.0, (c2 - cost[best]) / c2));
-}
 
 // WTA of BT (sum over channels, untruncated), reference = `ref`, target pixel x − d: the cost
 // module's Birchfield–Tomasi volume over the whole image, ties to the smallest disparity.
@@ -65,7 +58,7 @@ void WtaBirchfieldTomasi(const cv::Mat& ref, const cv::Mat& target, int dmin, in
         valid[i] = volume.HasData(y, x, i);
         curve[i] = volume.Cost(y, x, i);
       }
-      uniqueness->at<float>(y, x) = UniquenessOfCurve(curve.data(), valid.get(), num_d, row[x]);
+      uniqueness->at<float>(y, x) = internal::UniquenessOfCurve(curve.data(), valid.get(), num_d, row[x]);
       row[x] += dmin;
     }
   }
@@ -168,169 +161,6 @@ void WtaNcc(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax, int w
   }
 }
 
-cv::Mat ToLab(const cv::Mat& bgr) {
-  cv::Mat bgr32, lab;
-  bgr.convertTo(bgr32, CV_32FC3, 1.0 / 255.0);
-  cv::cvtColor(bgr32, lab, cv::COLOR_BGR2Lab);
-  return lab;
-}
-
-#if defined(__GNUC__) && defined(__x86_64__)
-#define GCPSTEREO_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
-#else
-#define GCPSTEREO_AVX2_CLONE
-#endif
-
-// One window offset of one disparity, along `count` pixels of a row: w = wr[j] · wt[j],
-// num[j] += w · e[j], den[j] += w. Compiled twice on x86-64, the AVX2 copy chosen when the CPU has
-// it: both do the same float product and double sums per element, so they give the same bits.
-GCPSTEREO_AVX2_CLONE void AccumulateOffset(const float* wr, const float* wt, const float* e,
-                                           double* num, double* den, int count) {
-  for (int j = 0; j < count; ++j) {
-    const float w = wr[j] * wt[j];  // 0 when q or q̄ is outside its image
-    num[j] += w * e[j];
-    den[j] += w;
-  }
-}
-
-void WtaAdaptiveWeights(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax,
-                        const StereoGcpOptions& options, cv::Mat* wta_out, cv::Mat* uniqueness,
-                        cv::Mat* subpixel) {
-  const int width = ref.cols;
-  const int height = ref.rows;
-  const int num_d = dmax - dmin + 1;
-  const cv::Mat ref_lab = ToLab(ref);
-  const cv::Mat tgt_lab = ToLab(target);
-  struct Offset {
-    int dy, dx;
-    float spatial;  // exp(−‖Δp‖ / γ_p)
-  };
-  std::vector<Offset> offsets;
-  const int radius = options.aw_window_px / 2;
-  const int stride = options.aw_stride_px;
-  const int reach = (radius / stride) * stride;  // the largest |dy| and |dx| of the window
-  for (int dy = -reach; dy <= radius; dy += stride) {
-    for (int dx = -reach; dx <= radius; dx += stride) {
-      offsets.push_back(
-          {dy, dx, static_cast<float>(std::exp(-std::hypot(dx, dy) / options.aw_gamma_p))});
-    }
-  }
-  const int num_k = static_cast<int>(offsets.size());
-  const float inv_gamma_c = static_cast<float>(1.0 / options.aw_gamma_c);
-
-  // Truncated absolute differences e(q, q − d), one float image per disparity (−1 = invalid),
-  // with a border of `reach` zeros: a window reaching outside the image reads a zero there, which
-  // its zero weight cancels, so the aggregation below needs no bounds test.
-  const int padded_width = width + 2 * reach;
-  std::vector<cv::Mat> tad(num_d);
-  for (int i = 0; i < num_d; ++i) {
-    const int d = dmin + i;
-    tad[i] = cv::Mat(height + 2 * reach, padded_width, CV_32F, cv::Scalar(0.0f));
-    tad[i](cv::Rect(reach, reach, width, height)).setTo(-1.0f);
-    for (int y = 0; y < height; ++y) {
-      const cv::Vec3b* r = ref.ptr<cv::Vec3b>(y);
-      const cv::Vec3b* t = target.ptr<cv::Vec3b>(y);
-      float* out = tad[i].ptr<float>(y + reach) + reach;
-      for (int x = std::max(0, d); x < std::min(width, width + d); ++x) {
-        const int xt = x - d;
-        const float e =
-            static_cast<float>(std::abs(r[x][0] - t[xt][0]) + std::abs(r[x][1] - t[xt][1]) +
-                               std::abs(r[x][2] - t[xt][2]));
-        out[x] = std::min(e, static_cast<float>(options.aw_truncation));
-      }
-    }
-  }
-
-  cv::Mat wta(ref.size(), CV_32S, cv::Scalar(-1));
-  *uniqueness = cv::Mat(ref.size(), CV_32F, cv::Scalar(0.0f));
-  *subpixel = cv::Mat(ref.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-    // Support weights of a row, offset-major (w[k · width + x]): for one disparity and offset
-    // the pixels of the row are consecutive in the weights of both images and in the differences,
-    // so the innermost loop runs along the row (and vectorises). Each pixel's sums still add the
-    // offsets in the same order, so the costs are those of the per-pixel formula bit for bit.
-    std::vector<float> w_ref(static_cast<size_t>(num_k) * width);
-    std::vector<float> w_tgt(static_cast<size_t>(num_k) * width);
-    auto support = [&](const cv::Mat& lab, int y, std::vector<float>* weights) {
-      for (int x = 0; x < width; ++x) {
-        const cv::Vec3f& centre = lab.at<cv::Vec3f>(y, x);
-        for (int k = 0; k < num_k; ++k) {
-          const int qy = y + offsets[k].dy;
-          const int qx = x + offsets[k].dx;
-          float w = 0.0f;
-          if (qy >= 0 && qy < height && qx >= 0 && qx < width) {
-            const cv::Vec3f diff = lab.at<cv::Vec3f>(qy, qx) - centre;
-            w = std::exp(-std::sqrt(diff.dot(diff)) * inv_gamma_c) * offsets[k].spatial;
-          }
-          (*weights)[static_cast<size_t>(k) * width + x] = w;
-        }
-      }
-    };
-    std::vector<double> numerator(width), denominator(width);
-    std::vector<double> costs(static_cast<size_t>(num_d) * width);  // costs[i · width + x]
-    std::unique_ptr<bool[]> has_cost(new bool[static_cast<size_t>(num_d) * width]);
-    std::vector<double> curve(num_d);
-    std::unique_ptr<bool[]> valid(new bool[num_d]);
-    for (int y = rows.begin(); y < rows.end(); ++y) {
-      support(ref_lab, y, &w_ref);
-      support(tgt_lab, y, &w_tgt);
-      for (int i = 0; i < num_d; ++i) {
-        const int d = dmin + i;
-        // Pixels whose match x − d lies in the target image.
-        const int lo = std::max(0, d), hi = std::min(width, width + d);
-        std::fill(numerator.begin(), numerator.end(), 0.0);
-        std::fill(denominator.begin(), denominator.end(), 0.0);
-        for (int k = 0; k < num_k && lo < hi; ++k) {
-          // Pixel x of the row against target pixel x − d, for x in [lo, hi).
-          AccumulateOffset(
-              &w_ref[static_cast<size_t>(k) * width + lo],
-              &w_tgt[static_cast<size_t>(k) * width + lo - d],
-              tad[i].ptr<float>(y + reach + offsets[k].dy) + reach + offsets[k].dx + lo,
-              &numerator[lo], &denominator[lo], hi - lo);
-        }
-        double* cost_row = &costs[static_cast<size_t>(i) * width];
-        bool* has_row = &has_cost[static_cast<size_t>(i) * width];
-        for (int x = 0; x < width; ++x) {
-          has_row[x] = x >= lo && x < hi && denominator[x] > 0.0;
-          if (has_row[x]) cost_row[x] = numerator[x] / denominator[x];
-        }
-      }
-      int* out = wta.ptr<int>(y);
-      for (int x = 0; x < width; ++x) {
-        double best = std::numeric_limits<double>::infinity();
-        int best_i = -1;
-        for (int i = 0; i < num_d; ++i) {
-          valid[i] = has_cost[static_cast<size_t>(i) * width + x];
-          if (!valid[i]) continue;
-          const double cost = costs[static_cast<size_t>(i) * width + x];
-          curve[i] = cost;
-          if (cost < best) {
-            best = cost;
-            best_i = i;
-            out[x] = dmin + i;
-          }
-        }
-        if (best_i >= 0) {
-          uniqueness->at<float>(y, x) = UniquenessOfCurve(curve.data(), valid.get(), num_d, best_i);
-          // Parabola through the costs at best − 1, best, best + 1 (vertex offset in (−½, ½)).
-          float refined = static_cast<float>(dmin + best_i);
-          if (best_i > 0 && best_i + 1 < num_d && valid[best_i - 1] && valid[best_i + 1]) {
-            const double c_minus = curve[best_i - 1], c0 = curve[best_i],
-                         c_plus = curve[best_i + 1];
-            const double curvature = c_minus - 2.0 * c0 + c_plus;
-            if (curvature > 0.0) {
-              refined +=
-                  static_cast<float>(std::clamp(0.5 * (c_minus - c_plus) / curvature, -0.5, 0.5));
-            }
-          }
-          subpixel->at<float>(y, x) = refined;
-        }
-      }
-    }
-  });
-  *wta_out = wta;
-}
-
 cv::Mat EdgeMask(const cv::Mat& bgr, const StereoGcpOptions& options) {
   cv::Mat grey, edges;
   cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
@@ -358,21 +188,21 @@ cv::Mat TextureStd(const cv::Mat& bgr, int window) {
   return std32;
 }
 
-// Evidence of `ref` against `target` (target pixel x − d).
+// Evidence of `ref` against `target` (target pixel x − d), all but the adaptive weights (which
+// internal::AdaptiveWeightEvidence computes for both views at once).
 StereoViewEvidence ComputeViewEvidence(const cv::Mat& ref, const cv::Mat& target, int dmin,
                                        int dmax, const StereoGcpOptions& options) {
   StereoViewEvidence e;
   WtaBirchfieldTomasi(ref, target, dmin, dmax, &e.wta_bt, &e.uniqueness_bt);
   WtaNcc(ref, target, dmin, dmax, options.ncc_window_px, &e.wta_ncc, &e.uniqueness_ncc);
-  WtaAdaptiveWeights(ref, target, dmin, dmax, options, &e.wta_aw, &e.uniqueness_aw, &e.subpixel_aw);
   e.texture_std = TextureStd(ref, options.texture_window_px);
   e.edges = EdgeMask(ref, options);
   return e;
 }
 
 void FlipEvidence(StereoViewEvidence* e) {
-  for (cv::Mat* m : {&e->wta_bt, &e->wta_ncc, &e->wta_aw, &e->uniqueness_bt, &e->uniqueness_ncc,
-                     &e->uniqueness_aw, &e->subpixel_aw, &e->texture_std, &e->edges}) {
+  for (cv::Mat* m : {&e->wta_bt, &e->wta_ncc, &e->uniqueness_bt, &e->uniqueness_ncc,
+                     &e->texture_std, &e->edges}) {
     cv::flip(*m, *m, 1);
   }
 }
@@ -544,17 +374,25 @@ StereoPairEvidence ComputeStereoEvidence(const cv::Mat& left_bgr, const cv::Mat&
   }
   const auto start = std::chrono::steady_clock::now();
   StereoPairEvidence evidence;
-  evidence.left =
-      ComputeViewEvidence(left_bgr, right_bgr, min_disparity_px, max_disparity_px, options);
-  if (progress && !progress(0.5)) throw Error("ExtractStereoGcps: cancelled");
   // The right view as reference: mirror both images, so that right pixel x ↔ left x + d becomes
-  // the left-reference case x' ↔ x' − d, and mirror the result back.
-  cv::Mat left_flipped, right_flipped;
-  cv::flip(left_bgr, left_flipped, 1);
-  cv::flip(right_bgr, right_flipped, 1);
-  evidence.right =
-      ComputeViewEvidence(right_flipped, left_flipped, min_disparity_px, max_disparity_px, options);
-  FlipEvidence(&evidence.right);
+  // the left-reference case x' ↔ x' − d, and mirror the result back. The two views are
+  // independent: both at once, so that neither's serial parts leave a core idle.
+  tbb::parallel_invoke(
+      [&] {
+        evidence.left =
+            ComputeViewEvidence(left_bgr, right_bgr, min_disparity_px, max_disparity_px, options);
+      },
+      [&] {
+        cv::Mat left_flipped, right_flipped;
+        cv::flip(left_bgr, left_flipped, 1);
+        cv::flip(right_bgr, right_flipped, 1);
+        evidence.right = ComputeViewEvidence(right_flipped, left_flipped, min_disparity_px,
+                                             max_disparity_px, options);
+        FlipEvidence(&evidence.right);
+      });
+  if (progress && !progress(0.25)) throw Error("ExtractStereoGcps: cancelled");
+  internal::AdaptiveWeightEvidence(left_bgr, right_bgr, min_disparity_px, max_disparity_px, options,
+                                   &evidence.left, &evidence.right);
   if (progress && !progress(1.0)) throw Error("ExtractStereoGcps: cancelled");
   evidence.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
