@@ -81,7 +81,8 @@ std::string Megabytes(double bytes) {
 }  // namespace
 
 double MemoryEstimate::total_bytes() const {
-  return base_bytes + views_bytes + std::max(propagation_bytes, optimization_bytes);
+  return base_bytes + views_bytes + std::max(propagation_bytes, optimization_bytes) +
+         partner_bytes;
 }
 
 nlohmann::json MemoryEstimate::ToJson() const {
@@ -90,11 +91,13 @@ nlohmann::json MemoryEstimate::ToJson() const {
           {"views_bytes", views_bytes},
           {"propagation_bytes", propagation_bytes},
           {"optimization_bytes", optimization_bytes},
+          {"partner_bytes", partner_bytes},
           {"concurrent_tiles", concurrent_tiles},
           {"tile_pixels", tile_pixels},
           {"note",
            "estimated before the propagation and the optimisation allocate (base + views + the "
-           "larger of propagation and optimisation); compare peak_memory_bytes"}};
+           "larger of propagation and optimisation + the left-right partner's); compare "
+           "peak_memory_bytes"}};
 }
 
 ViewMemoryInput ViewMemoryInputOf(const PipelineConfig& options, int width_px, int height_px,
@@ -115,6 +118,7 @@ ViewMemoryInput ViewMemoryInputOf(const PipelineConfig& options, int width_px, i
   input.window_filter = options.cost.birchfield_tomasi.window.window_px > 1 ||
                         options.cost.plane_sweep.window.window_px > 1;
   input.optimize = options.runtime.stop_after == "all";
+  input.left_right_check = options.optimizer.left_right_check;
   return input;
 }
 
@@ -149,6 +153,9 @@ MemoryEstimate EstimateViewMemory(const ViewMemoryInput& in) {
                               : in.refinement == "irls" ? 2.0 * labels + kIrlsBytesPerPixel + 11.0
                                                         : 0.0;
     e.optimization_bytes = e.concurrent_tiles * e.tile_pixels * std::max(expansion, refinement);
+    // The neighbour's solve of the left-right check: its D̂ and then its tiles, alongside the
+    // reference's (pipeline/src/view_stages.h, StartPartnerSolve), on an image of the same size.
+    if (in.left_right_check) e.partner_bytes = std::max(e.propagation_bytes, e.optimization_bytes);
   }
   return e;
 }

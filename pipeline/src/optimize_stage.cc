@@ -219,22 +219,36 @@ optimize::MakeTileProblem PlaneSweepTileProblem(const Dataset& dataset, const La
   };
 }
 
+// The segmentation that limits the GCP energy to the colour segments holding a GCP
+// (optimizer.prior_segment_k > 0), else none.
+std::optional<optimize::SegmentationOptions> PriorSegmentation(const PipelineConfig& options) {
+  if (options.optimizer.prior_segment_k <= 0.0) return std::nullopt;
+  optimize::SegmentationOptions segmentation = options.optimizer.plane_fit_options.segmentation;
+  segmentation.k = options.optimizer.prior_segment_k;
+  return segmentation;
+}
+
 // The left-right check's second problem: the neighbour as reference, solved on mirrored images so
 // that every cost and GCP routine keeps its disparity convention; with the GCP energy, its prior
 // is D̂ of the GCPs the neighbour sees, propagated over its mirrored image.
-PartnerSolve SolveMirroredPartner(const OptimizeInputs& in, ViewSolver solver,
-                                  cv::Mat mirrored_reference, cv::Mat mirrored_neighbor) {
+PartnerSolve SolveMirroredPartner(const PartnerInputs& in) {
   Timer timer;
   const PipelineConfig& options = in.options;
+  const View& reference = in.dataset.reference;
+  const bool use_gcp_energy = options.optimizer.energy.use_gcp_energy && !in.gcps.empty();
+  ViewSolver solver = ViewSolverOf(options, reference.image.size(), use_gcp_energy);
+  cv::Mat mirrored_reference, mirrored_neighbor;
+  cv::flip(in.pair.neighbor->image, mirrored_reference, 1);
+  cv::flip(reference.image, mirrored_neighbor, 1);
   EnergyPrior mirrored_prior;
   if (solver.energy.use_gcp_energy) {
     std::vector<cv::Point> mirrored_gcp_pixels;
     const cv::Mat sparse =
-        MirroredPartnerGcpLabels(in.gcps, in.labels, in.dataset.reference.camera,
-                                 in.pair.neighbor->camera, options.gcp.lidar, &mirrored_gcp_pixels);
+        MirroredPartnerGcpLabels(in.gcps, in.labels, reference.camera, in.pair.neighbor->camera,
+                                 options.gcp.lidar, &mirrored_gcp_pixels);
     mirrored_prior.prior = EnergyPriorOf(
         options, PropagateLabels(mirrored_reference, sparse, in.labels, options.propagation).values,
-        mirrored_gcp_pixels, mirrored_reference, in.prior.segmentation);
+        mirrored_gcp_pixels, mirrored_reference, PriorSegmentation(options));
     mirrored_prior.weight = optimize::SpreadPriorWeights(sparse, mirrored_reference, solver.energy);
   }
   const optimize::MakeTileProblem make_problem = PairTileProblem(
@@ -324,16 +338,18 @@ cv::Mat RenderPlaneFit(const cv::Mat& image_bgr, const cv::Mat& segments, const 
 
 }  // namespace
 
+std::future<PartnerSolve> StartPartnerSolve(const PartnerInputs& inputs) {
+  // The load stage has checked that the check has a rectified pair (inputs.pair.neighbor).
+  return std::async(std::launch::async, SolveMirroredPartner, std::cref(inputs));
+}
+
 EnergyPrior EnergyPriorStage(const PipelineConfig& options, const View& reference,
                              const GcpSet& gcps, const LabelSpace& labels,
                              const cv::Mat& propagated) {
   EnergyPrior result;
   std::vector<cv::Point> gcp_pixels;
   for (const Gcp& g : gcps.points) gcp_pixels.emplace_back(g.col, g.row);
-  if (options.optimizer.prior_segment_k > 0.0) {
-    result.segmentation = options.optimizer.plane_fit_options.segmentation;
-    result.segmentation->k = options.optimizer.prior_segment_k;
-  }
+  result.segmentation = PriorSegmentation(options);
   result.prior =
       EnergyPriorOf(options, propagated, gcp_pixels, reference.image, result.segmentation);
   const cv::Size size = reference.image.size();
@@ -403,15 +419,6 @@ OptimizeResult OptimizeStage(const OptimizeInputs& in) {
                             options.cost.birchfield_tomasi, prior, &solver)
           : PlaneSweepTileProblem(in.dataset, in.labels, options.cost.plane_sweep, prior);
   OptimizeResult result;
-  // The neighbour's solve needs nothing from the reference's, so it runs alongside it
-  // (α-expansion on one tile is mostly single-threaded: the two solves share the cores).
-  if (options.optimizer.left_right_check) {
-    cv::Mat mirrored_reference, mirrored_neighbor;
-    cv::flip(in.pair.neighbor->image, mirrored_reference, 1);
-    cv::flip(reference.image, mirrored_neighbor, 1);
-    result.partner = std::async(std::launch::async, SolveMirroredPartner, std::cref(in), solver,
-                                mirrored_reference, mirrored_neighbor);
-  }
   result.optimized = solver.Solve(
       make_problem, options.optimizer.left_right_check ? "graph cuts, both views" : "graph cuts");
   result.stage_report = {

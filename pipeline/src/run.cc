@@ -206,13 +206,14 @@ struct OptimizedLabels {
 // the one before.
 OptimizedLabels OptimizeLabels(json& stages, const PipelineConfig& options, const LoadResult& load,
                                const LabelSpace& labels, const GcpSet& gcps,
-                               const cv::Mat& propagated) {
+                               const cv::Mat& propagated, const PairLabels& pair,
+                               std::future<PartnerSolve> partner) {
   const Dataset& dataset = load.dataset;
   const EnergyPrior prior = EnergyPriorStage(options, dataset.reference, gcps, labels, propagated);
-  const PairLabels pair = PairLabelsOf(dataset, labels, load.cost_method);
   const OptimizeInputs inputs{options, dataset, load.cost_method, labels, gcps, prior, pair};
   OptimizeResult optimized =
       Timed(stages, "cost_and_optimization", [&] { return OptimizeStage(inputs); });
+  optimized.partner = std::move(partner);
   OptimizedLabels result{optimized.optimized.labels, {}};
   LeftRightCheckResult left_right;
   if (options.optimizer.left_right_check) {
@@ -288,6 +289,15 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
   spdlog::info("memory: estimated peak {:.0f} MB", memory.total_bytes() / 1e6);
   CheckMemoryBudget(memory, options.runtime.max_memory_gb);
 
+  // 4b. With the left-right check, the neighbour's own solve starts now and runs alongside D̂ and
+  // the reference's solve (it needs neither).
+  const PairLabels pair = PairLabelsOf(dataset, labels, load.cost_method);
+  const PartnerInputs partner_inputs{options, dataset, labels, gcps, pair};
+  std::future<PartnerSolve> partner;
+  if (stop_after != "propagation" && options.optimizer.left_right_check) {
+    partner = StartPartnerSolve(partner_inputs);
+  }
+
   // 3. Adaptive propagation of the GCPs (eq. 5): D̂, the prior of the GCP energy. In the data
   // set's units it is an output of every run with GCPs, and the product of one stopped here
   // (LiDAR depth completion without stereo).
@@ -306,7 +316,8 @@ RunSummary RunViewInFolder(const LoadedConfig& config, OutputFolder& out,
   MeshResult mesh;
   std::future<double> obj_export;
   if (stop_after != "propagation") {
-    optimized = OptimizeLabels(stages, options, load, labels, gcps, propagation.prior);
+    optimized = OptimizeLabels(stages, options, load, labels, gcps, propagation.prior, pair,
+                               std::move(partner));
     result = DepthMapsStage(optimized.labels, labels, dataset);
     mesh = MeshStage(options, reference, result.depth);
     if (options.output.mesh) {

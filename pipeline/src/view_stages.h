@@ -119,15 +119,25 @@ struct PairLabels {
 PairLabels PairLabelsOf(const Dataset& dataset, const LabelSpace& labels,
                         const std::string& cost_method);
 
-// The neighbour's own solve for the left-right check, on mirrored images; `seconds` is its wall
-// time (it overlaps the reference's solve).
+// 4b. The left-right check's second solve (optimizer.left_right_check, rectified pairs): the
+// neighbour as reference, on mirrored images, with D̂ of the GCPs it sees as its prior. It needs
+// nothing from the reference's D̂ or solve, so it starts before them and runs alongside (D̂'s
+// solve and one tile's α-expansion are mostly single-threaded: the two share the cores).
+// `seconds` is its wall time from the start. `inputs` must outlive the future.
 struct PartnerSolve {
   optimize::TiledResult result;
   double seconds = 0.0;
 };
+struct PartnerInputs {
+  const PipelineConfig& options;
+  const Dataset& dataset;
+  const LabelSpace& labels;
+  const GcpSet& gcps;
+  const PairLabels& pair;
+};
+std::future<PartnerSolve> StartPartnerSolve(const PartnerInputs& inputs);
 
-// 5. Matching costs and global optimisation (or winner-take-all), tile by tile. With the
-// left-right check the neighbour's solve starts alongside and is left running in `partner`.
+// 5. Matching costs and global optimisation (or winner-take-all), tile by tile.
 struct OptimizeInputs {
   const PipelineConfig& options;
   const Dataset& dataset;
@@ -139,10 +149,9 @@ struct OptimizeInputs {
 };
 struct OptimizeResult {
   optimize::TiledResult optimized;
-  std::future<PartnerSolve> partner;  // valid with optimizer.left_right_check
+  std::future<PartnerSolve> partner;  // StartPartnerSolve's, with optimizer.left_right_check
   nlohmann::json stage_report = nlohmann::json::object();
 };
-// `inputs` must outlive `partner` (the neighbour's solve reads them).
 OptimizeResult OptimizeStage(const OptimizeInputs& inputs);
 
 // 5b. Left-right check (optimizer.left_right_check, rectified pairs): pixels whose disparities

@@ -4,6 +4,7 @@
 // line naming the keys that lower it.
 #include "gcpstereo/pipeline/memory_estimate.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -62,6 +63,22 @@ TEST(MemoryEstimate, GrowsWithLabelsAndPixelsAndShrinksWithTiles) {
   ViewMemoryInput one_thread = Fountain();
   one_thread.threads = 1;
   EXPECT_EQ(EstimateViewMemory(one_thread).concurrent_tiles, 1);
+}
+
+// The left-right check's partner solve runs alongside the reference's D̂ and tiles: as much again
+// as the larger of the two, and nothing when the run stops after D̂.
+TEST(MemoryEstimate, LeftRightPartnerCountsAsASecondSolve) {
+  const MemoryEstimate base = EstimateViewMemory(Fountain());
+  EXPECT_EQ(base.partner_bytes, 0.0);
+  ViewMemoryInput checked = Fountain();
+  checked.left_right_check = true;
+  const MemoryEstimate with_partner = EstimateViewMemory(checked);
+  EXPECT_GT(with_partner.partner_bytes, 0.0);
+  EXPECT_DOUBLE_EQ(with_partner.partner_bytes,
+                   std::max(base.propagation_bytes, base.optimization_bytes));
+  EXPECT_DOUBLE_EQ(with_partner.total_bytes() - base.total_bytes(), with_partner.partner_bytes);
+  checked.optimize = false;
+  EXPECT_EQ(EstimateViewMemory(checked).partner_bytes, 0.0);
 }
 
 TEST(MemoryEstimate, BudgetIsTheKeyOrTheMachinesAvailableMemory) {

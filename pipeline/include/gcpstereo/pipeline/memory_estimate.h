@@ -29,6 +29,9 @@ struct ViewMemoryInput {
   double resident_bytes = 0.0;
   bool has_gcps = true;  // no GCPs: no propagation
   bool optimize = true;  // false when the run stops after the propagation
+  // optimizer.left_right_check: the neighbour's own solve (its D̂, then its tiles) runs alongside
+  // the reference's D̂ and tiles.
+  bool left_right_check = false;
 };
 
 // The estimate, in bytes, with its parts (report.json "memory_estimate").
@@ -37,10 +40,11 @@ struct MemoryEstimate {
   double views_bytes = 0.0;  // the reference's and neighbours' images (0 with resident memory)
   double propagation_bytes = 0.0;   // D̂'s solve (the sparse system and its factor)
   double optimization_bytes = 0.0;  // the tiles solved at once: cost volumes, graphs, buffers
+  double partner_bytes = 0.0;  // the left-right check's second solve, alongside (as large again)
   int concurrent_tiles = 0;
   double tile_pixels = 0.0;  // the largest tile's, with its overlap
   // The propagation's and the optimisation's memory is released between them: the peak is the
-  // larger of the two on top of the base and the views.
+  // larger of the two on top of the base and the views, plus the left-right check's partner.
   double total_bytes() const;
   nlohmann::json ToJson() const;
 };
