@@ -81,8 +81,7 @@ std::string Megabytes(double bytes) {
 }  // namespace
 
 double MemoryEstimate::total_bytes() const {
-  return base_bytes + views_bytes + std::max(propagation_bytes, optimization_bytes) +
-         partner_bytes;
+  return base_bytes + views_bytes + std::max(propagation_bytes, optimization_bytes) + partner_bytes;
 }
 
 nlohmann::json MemoryEstimate::ToJson() const {

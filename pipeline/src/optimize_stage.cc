@@ -194,8 +194,8 @@ optimize::MakeTileProblem PairTileProblem(const cv::Mat& left, const cv::Mat& ri
     LabelBands bands;
     if (solver != nullptr && solver->options.optimizer.method != "wta") {
       bands = optimize::CandidateLabelBands(problem.prior, problem.prior_weight,
-                                            static_cast<int>(disparities.size()),
-                                            solver->expansion, solver->energy, false);
+                                            static_cast<int>(disparities.size()), solver->expansion,
+                                            solver->energy, false);
     }
     problem.data =
         cost::ComputeBirchfieldTomasiCost(left, right, disparities, region, options, &bands);

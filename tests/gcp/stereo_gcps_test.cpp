@@ -153,8 +153,8 @@ TEST(StereoGcpsTest, AdaptiveWeightEvidenceIsThePerPixelFormula) {
                 float diff = -1.0f;  // the partner pixel qxp is outside the image
                 if (qxp >= 0 && qxp < ref.cols) {
                   const cv::Vec3b a = ref.at<cv::Vec3b>(qy, qx), b = other.at<cv::Vec3b>(qy, qxp);
-                  diff = std::min(static_cast<float>(std::abs(a[0] - b[0]) +
-                                                     std::abs(a[1] - b[1]) + std::abs(a[2] - b[2])),
+                  diff = std::min(static_cast<float>(std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) +
+                                                     std::abs(a[2] - b[2])),
                                   static_cast<float>(options.aw_truncation));
                 }
                 numerator += w * diff;

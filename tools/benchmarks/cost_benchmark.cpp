@@ -24,6 +24,7 @@
 #include "gcpstereo/core/types.h"
 #include "gcpstereo/cost/birchfield_tomasi.h"
 #include "gcpstereo/cost/plane_sweep.h"
+#include "random_texture.h"
 
 namespace gcpstereo::cost {
 namespace {
@@ -32,18 +33,7 @@ constexpr int kWidth = 1536;
 constexpr int kHeight = 1024;
 constexpr int kNeighbors = 6;
 
-cv::Mat RandomTexture(int width, int height, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  cv::Mat small(height / 4 + 1, width / 4 + 1, CV_8UC3);
-  cv::randu(small, cv::Scalar::all(0), cv::Scalar::all(255));
-  std::uniform_int_distribution<int> v(0, 255);
-  for (int r = 0; r < small.rows; ++r)
-    for (int c = 0; c < small.cols; ++c)
-      small.at<cv::Vec3b>(r, c) = cv::Vec3b(v(rng), v(rng), v(rng));
-  cv::Mat image;
-  cv::resize(small, image, cv::Size(width, height), 0, 0, cv::INTER_CUBIC);
-  return image;
-}
+using benchmarks::RandomTexture;
 
 Camera FountainLikeCamera(int index) {
   // Cameras on an arc of radius 8 m around the point (0, 0, 8), 0.6 m apart; index 0 = reference.
@@ -97,7 +87,11 @@ void BM_PlaneSweepThroughput(benchmark::State& state) { SweepThroughput(state, "
 BENCHMARK(BM_PlaneSweepThroughput)->Arg(8)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_PlaneSweepZnccThroughput(benchmark::State& state) { SweepThroughput(state, "zncc"); }
-BENCHMARK(BM_PlaneSweepZnccThroughput)->Arg(8)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PlaneSweepZnccThroughput)
+    ->Arg(8)
+    ->Arg(32)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_PlaneSweepFountain(benchmark::State& state) {
   const Fountain& f = GetFountain();

@@ -6,13 +6,13 @@
 //   BM_StereoEvidenceAwStride/S: the same with gcp.stereo.aw_stride_px = S.
 // The left image is a random value-noise texture; the right one is it shifted by 20 px in the
 // left half and by 40 px in the right half. The content hardly changes the work done.
-#include <cstdint>
-#include <random>
+#include <algorithm>
 
 #include <benchmark/benchmark.h>
-#include <opencv2/imgproc.hpp>
+#include <opencv2/core.hpp>
 
 #include "gcpstereo/gcp/stereo_gcps.h"
+#include "random_texture.h"
 
 namespace gcpstereo::gcp {
 namespace {
@@ -21,28 +21,17 @@ constexpr int kWidth = 450;
 constexpr int kHeight = 375;
 constexpr int kMaxDisparity = 59;
 
-cv::Mat RandomTexture(int width, int height, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<int> v(0, 255);
-  cv::Mat small(height / 3 + 1, width / 3 + 1, CV_8UC3);
-  for (int r = 0; r < small.rows; ++r)
-    for (int c = 0; c < small.cols; ++c)
-      small.at<cv::Vec3b>(r, c) = cv::Vec3b(v(rng), v(rng), v(rng));
-  cv::Mat image;
-  cv::resize(small, image, cv::Size(width, height), 0, 0, cv::INTER_CUBIC);
-  return image;
-}
-
 struct Pair {
   cv::Mat left, right;
   Pair() {
-    const cv::Mat texture = RandomTexture(kWidth + 2 * kMaxDisparity, kHeight, 7);
+    const cv::Mat texture = benchmarks::RandomTexture(kWidth + 2 * kMaxDisparity, kHeight, 7, 3);
     left = texture(cv::Rect(kMaxDisparity, 0, kWidth, kHeight)).clone();
     right = cv::Mat(kHeight, kWidth, CV_8UC3);
     for (int y = 0; y < kHeight; ++y) {
       for (int x = 0; x < kWidth; ++x) {
         const int d = x < kWidth / 2 ? 20 : 40;  // right x ↔ left x + d
-        right.at<cv::Vec3b>(y, x) = texture.at<cv::Vec3b>(y, kMaxDisparity + std::min(x + d, kWidth - 1));
+        right.at<cv::Vec3b>(y, x) =
+            texture.at<cv::Vec3b>(y, kMaxDisparity + std::min(x + d, kWidth - 1));
       }
     }
   }
@@ -59,7 +48,9 @@ void Evidence(benchmark::State& state, int stride) {
   }
 }
 
-void BM_StereoEvidence(benchmark::State& state) { Evidence(state, StereoGcpOptions{}.aw_stride_px); }
+void BM_StereoEvidence(benchmark::State& state) {
+  Evidence(state, StereoGcpOptions{}.aw_stride_px);
+}
 void BM_StereoEvidenceAwStride(benchmark::State& state) {
   Evidence(state, static_cast<int>(state.range(0)));
 }

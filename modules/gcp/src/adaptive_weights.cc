@@ -18,9 +18,9 @@
 #include <memory>
 #include <vector>
 
-#include <opencv2/imgproc.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <opencv2/imgproc.hpp>
 
 namespace gcpstereo::gcp::internal {
 
@@ -158,7 +158,8 @@ void AdaptiveWeightEvidence(const cv::Mat& left_bgr, const cv::Mat& right_bgr, i
   tbb::parallel_for(0, num_d, [&](int i) {
     const int d = dmin + i;
     for (int y = 0; y < height; ++y) {
-      float* out = &tad[(y + reach) * row_stride + static_cast<std::ptrdiff_t>(i) * plane_width + reach];
+      float* out =
+          &tad[(y + reach) * row_stride + static_cast<std::ptrdiff_t>(i) * plane_width + reach];
       const cv::Vec3b* l = left_bgr.ptr<cv::Vec3b>(y);
       const cv::Vec3b* r = right_bgr.ptr<cv::Vec3b>(y);
       std::fill(out, out + std::min(width, std::max(0, d)), -1.0f);

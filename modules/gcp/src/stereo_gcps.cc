@@ -25,8 +25,8 @@
 #include <vector>
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -58,7 +58,8 @@ void WtaBirchfieldTomasi(const cv::Mat& ref, const cv::Mat& target, int dmin, in
         valid[i] = volume.HasData(y, x, i);
         curve[i] = volume.Cost(y, x, i);
       }
-      uniqueness->at<float>(y, x) = internal::UniquenessOfCurve(curve.data(), valid.get(), num_d, row[x]);
+      uniqueness->at<float>(y, x) =
+          internal::UniquenessOfCurve(curve.data(), valid.get(), num_d, row[x]);
       row[x] += dmin;
     }
   }
