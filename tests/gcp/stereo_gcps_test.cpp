@@ -196,6 +196,95 @@ TEST(StereoGcpsTest, AdaptiveWeightEvidenceIsThePerPixelFormula) {
   }
 }
 
+// The NCC evidence against the normalised cross-correlation evaluated pixel by pixel and
+// disparity by disparity: an n×n RGB patch (rows and columns reflected at the image's borders,
+// cv::BORDER_REFLECT_101, as the box filter does), against the target shifted by d (its first
+// column repeated where x − d leaves it), flat patches skipped; same WTA (ties to the smaller
+// d), same uniqueness, in both views, windows 3 and 5 on a 29×17 pair.
+TEST(StereoGcpsTest, NccEvidenceIsThePerPixelFormula) {
+  std::mt19937 rng(31);
+  std::uniform_int_distribution<int> value(0, 255);
+  cv::Mat small(6, 9, CV_8UC3), left, right;
+  for (auto it = small.begin<cv::Vec3b>(); it != small.end<cv::Vec3b>(); ++it) {
+    *it = cv::Vec3b(value(rng), value(rng), value(rng));
+  }
+  cv::resize(small, left, cv::Size(29, 17), 0, 0, cv::INTER_LINEAR);
+  left(cv::Rect(0, 0, 8, 6)).setTo(cv::Scalar(90, 90, 90));  // a flat corner: no correlation
+  cv::Mat noise(left.size(), CV_8UC3);
+  cv::RNG(37).fill(noise, cv::RNG::UNIFORM, 0, 12);
+  right = cv::Mat(left.size(), CV_8UC3);
+  for (int y = 0; y < left.rows; ++y) {  // right(x) = left(x + 2) + noise
+    for (int x = 0; x < left.cols; ++x) {
+      right.at<cv::Vec3b>(y, x) = left.at<cv::Vec3b>(y, std::min(left.cols - 1, x + 2));
+    }
+  }
+  right += noise;
+  const int dmin = 0, dmax = 5;
+  for (const int window : {3, 5}) {
+    StereoGcpOptions options;
+    options.ncc_window_px = window;
+    const StereoPairEvidence evidence = ComputeStereoEvidence(left, right, dmin, dmax, options);
+    for (const int sign : {-1, 1}) {
+      const StereoViewEvidence& e = sign < 0 ? evidence.left : evidence.right;
+      // The right view is the left-view formula on the mirrored pair.
+      cv::Mat ref = sign < 0 ? left : right, other = sign < 0 ? right : left;
+      if (sign > 0) {
+        cv::flip(ref, ref, 1);
+        cv::flip(other, other, 1);
+      }
+      const int r = window / 2, width = ref.cols, height = ref.rows;
+      const double n = 3.0 * window * window;
+      for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+          std::vector<std::pair<double, int>> costs;  // (1 − ncc, d), d ascending
+          for (int d = dmin; d <= dmax && x - d >= 0; ++d) {
+            double sr = 0, sr2 = 0, st = 0, st2 = 0, srt = 0;
+            for (int i = -r; i <= r; ++i) {
+              const int qy = cv::borderInterpolate(y + i, height, cv::BORDER_REFLECT_101);
+              for (int j = -r; j <= r; ++j) {
+                const int qx = cv::borderInterpolate(x + j, width, cv::BORDER_REFLECT_101);
+                const cv::Vec3b a = ref.at<cv::Vec3b>(qy, qx);
+                const cv::Vec3b b = other.at<cv::Vec3b>(qy, std::max(0, qx - d));
+                for (int c = 0; c < 3; ++c) {
+                  sr += a[c];
+                  sr2 += a[c] * a[c];
+                  st += b[c];
+                  st2 += b[c] * b[c];
+                  srt += a[c] * b[c];
+                }
+              }
+            }
+            const double var_r = sr2 - sr * sr / n, var_t = st2 - st * st / n;
+            const double denominator = std::sqrt(std::max(0.0, var_r) * std::max(0.0, var_t));
+            if (denominator < 1e-6) continue;
+            costs.emplace_back(1.0 - (srt - sr * st / n) / denominator, d);
+          }
+          const int xe = sign < 0 ? x : width - 1 - x;  // the evidence's own column
+          if (costs.empty()) {
+            EXPECT_EQ(e.wta_ncc.at<int>(y, xe), -1) << "view " << sign << " at " << x << "," << y;
+            continue;
+          }
+          std::size_t best = 0;
+          for (std::size_t i = 1; i < costs.size(); ++i) {
+            if (costs[i].first < costs[best].first) best = i;
+          }
+          EXPECT_EQ(e.wta_ncc.at<int>(y, xe), costs[best].second)
+              << "view " << sign << " window " << window << " at " << x << "," << y;
+          double second = std::numeric_limits<double>::infinity();
+          for (const auto& c : costs) {
+            if (std::abs(c.second - costs[best].second) > 1) second = std::min(second, c.first);
+          }
+          const double u = std::isfinite(second) && second > 0.0
+                               ? std::max(0.0, (second - costs[best].first) / second)
+                               : 0.0;
+          EXPECT_NEAR(e.uniqueness_ncc.at<float>(y, xe), u, 1e-6)
+              << "view " << sign << " at " << x << "," << y;
+        }
+      }
+    }
+  }
+}
+
 TEST(StereoGcpsTest, BadInputsThrow) {
   const cv::Mat image(20, 30, CV_8UC3, cv::Scalar(1, 2, 3));
   try {

@@ -3,8 +3,9 @@
 // Stereo GCPs of Wang & Yang, CVPR 2011, §4.1 (see stereo_gcps.h for the procedure and the
 // deliberate deviations). The three local matchers are private to this file:
 //  * Birchfield–Tomasi [3]: the cost module's volume (no aggregation, integer disparities).
-//  * NCC over an n×n RGB patch with box filters in double precision (sums of squares of 75 values
-//    up to 255² lose digits in float).
+//  * NCC over an n×n RGB patch from integer box sums (exact: sums of squares of 75 values up to
+//    255² would lose digits in float); only the sum of reference × target needs a new box sum
+//    per disparity beside the shifted target's.
 //  * Yoon–Kweon adaptive support weights, exact formula, window sampled every aw_stride_px: in
 //    adaptive_weights.cc, both views at once.
 #include "gcpstereo/gcp/stereo_gcps.h"
@@ -18,6 +19,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -66,27 +68,56 @@ void WtaBirchfieldTomasi(const cv::Mat& ref, const cv::Mat& target, int dmin, in
   *wta_out = wta;
 }
 
-// Target image shifted so that shifted(x) = target(x − d) (edge replicated where x − d is outside).
-cv::Mat Shifted(const cv::Mat& target, int d) {
-  cv::Mat shifted;
-  cv::Mat map_x(target.size(), CV_32F), map_y(target.size(), CV_32F);
-  for (int y = 0; y < target.rows; ++y) {
-    for (int x = 0; x < target.cols; ++x) {
-      map_x.at<float>(y, x) = static_cast<float>(std::min(target.cols - 1, std::max(0, x - d)));
-      map_y.at<float>(y, x) = static_cast<float>(y);
+// Unnormalised box sums over a window×window neighbourhood with BORDER_REFLECT_101 (as
+// cv::boxFilter), of an int32 image given row by row: out(y, x) = Σ value(refl(y + i), refl(x +
+// j)). The NCC's sums are of integers (grey levels, their squares and products), so integer sums
+// give exactly the doubles the floating-point box filter would.
+class BoxSums {
+ public:
+  BoxSums(int width, int height, int window)
+      : width_(width),
+        height_(height),
+        window_(window),
+        row_index_(height * window),
+        col_index_(width * window),
+        vertical_(static_cast<std::size_t>(width) * height) {
+    const int r = window / 2;
+    for (int y = 0; y < height; ++y)
+      for (int k = 0; k < window; ++k)
+        row_index_[y * window + k] =
+            cv::borderInterpolate(y + k - r, height, cv::BORDER_REFLECT_101);
+    for (int x = 0; x < width; ++x)
+      for (int k = 0; k < window; ++k)
+        col_index_[x * window + k] =
+            cv::borderInterpolate(x + k - r, width, cv::BORDER_REFLECT_101);
+  }
+  // Box sums of `image` (width × height int32, row-major) into `out` (the same size).
+  void Sum(const std::int32_t* image, std::int32_t* out) {
+    for (int y = 0; y < height_; ++y) {
+      std::int32_t* v = &vertical_[static_cast<std::size_t>(y) * width_];
+      std::fill(v, v + width_, 0);
+      for (int k = 0; k < window_; ++k) {
+        const std::int32_t* row =
+            image + static_cast<std::size_t>(row_index_[y * window_ + k]) * width_;
+        for (int x = 0; x < width_; ++x) v[x] += row[x];
+      }
+    }
+    for (int y = 0; y < height_; ++y) {
+      const std::int32_t* v = &vertical_[static_cast<std::size_t>(y) * width_];
+      std::int32_t* o = out + static_cast<std::size_t>(y) * width_;
+      for (int x = 0; x < width_; ++x) {
+        std::int32_t sum = 0;
+        for (int k = 0; k < window_; ++k) sum += v[col_index_[x * window_ + k]];
+        o[x] = sum;
+      }
     }
   }
-  cv::remap(target, shifted, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_REPLICATE);
-  return shifted;
-}
 
-cv::Mat SumChannels(const cv::Mat& m) {
-  std::vector<cv::Mat> channels;
-  cv::split(m, channels);
-  cv::Mat sum = channels[0].clone();
-  for (size_t i = 1; i < channels.size(); ++i) sum += channels[i];
-  return sum;
-}
+ private:
+  int width_, height_, window_;
+  std::vector<int> row_index_, col_index_;
+  std::vector<std::int32_t> vertical_;
+};
 
 // The four lowest costs seen so far at one pixel, ascending (ties: the earlier, i.e. smaller, d).
 // Only b − 1 and b + 1 can be within 1 px of the best b, so the best cost more than 1 px away from
@@ -120,33 +151,57 @@ struct TopFour {
 
 void WtaNcc(const cv::Mat& ref, const cv::Mat& target, int dmin, int dmax, int window, cv::Mat* wta,
             cv::Mat* uniqueness) {
-  const cv::Size ksize(window, window);
+  const int width = ref.cols, height = ref.rows;
+  const std::size_t pixels = static_cast<std::size_t>(width) * height;
   const double n = 3.0 * window * window;
-  cv::Mat ref64, tgt64;
-  ref.convertTo(ref64, CV_64FC3);
-  target.convertTo(tgt64, CV_64FC3);
-  auto box = [&](const cv::Mat& m) {
-    cv::Mat out;
-    cv::boxFilter(m, out, CV_64F, ksize, cv::Point(-1, -1), false, cv::BORDER_REFLECT_101);
-    return SumChannels(out);
-  };
-  const cv::Mat s_ref = box(ref64);
-  const cv::Mat s_ref2 = box(ref64.mul(ref64));
-  std::vector<TopFour> top(static_cast<size_t>(ref.rows) * ref.cols);
+  // Per pixel, the sums over the RGB channels of the values and of their squares.
+  std::vector<std::int32_t> ref1(pixels), ref2(pixels), tgt1(pixels), tgt2(pixels);
+  for (int y = 0; y < height; ++y) {
+    const cv::Vec3b* r = ref.ptr<cv::Vec3b>(y);
+    const cv::Vec3b* t = target.ptr<cv::Vec3b>(y);
+    for (int x = 0; x < width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * width + x;
+      ref1[i] = r[x][0] + r[x][1] + r[x][2];
+      ref2[i] = r[x][0] * r[x][0] + r[x][1] * r[x][1] + r[x][2] * r[x][2];
+      tgt1[i] = t[x][0] + t[x][1] + t[x][2];
+      tgt2[i] = t[x][0] * t[x][0] + t[x][1] * t[x][1] + t[x][2] * t[x][2];
+    }
+  }
+  BoxSums box(width, height, window);
+  std::vector<std::int32_t> s_ref(pixels), s_ref2(pixels);
+  box.Sum(ref1.data(), s_ref.data());
+  box.Sum(ref2.data(), s_ref2.data());
+  // The target shifted by d, shifted(x) = target(x − d) (its first column repeated where x − d
+  // leaves the image), and its product with the reference, box-summed per disparity.
+  std::vector<std::int32_t> shifted1(pixels), shifted2(pixels), product(pixels);
+  std::vector<std::int32_t> s_t(pixels), s_t2(pixels), s_rt(pixels);
+  std::vector<TopFour> top(pixels);
   for (int d = dmin; d <= dmax; ++d) {
-    const cv::Mat shifted = Shifted(tgt64, d);
-    const cv::Mat s_t = box(shifted);
-    const cv::Mat s_t2 = box(shifted.mul(shifted));
-    const cv::Mat s_rt = box(ref64.mul(shifted));
-    for (int y = 0; y < ref.rows; ++y) {
-      for (int x = std::max(0, d); x < std::min(ref.cols, ref.cols + d); ++x) {
-        const double sr = s_ref.at<double>(y, x), st = s_t.at<double>(y, x);
-        const double var_r = s_ref2.at<double>(y, x) - sr * sr / n;
-        const double var_t = s_t2.at<double>(y, x) - st * st / n;
+    for (int y = 0; y < height; ++y) {
+      const cv::Vec3b* r = ref.ptr<cv::Vec3b>(y);
+      const cv::Vec3b* t = target.ptr<cv::Vec3b>(y);
+      const std::size_t row = static_cast<std::size_t>(y) * width;
+      for (int x = 0; x < width; ++x) {
+        const int xt = std::min(width - 1, std::max(0, x - d));
+        shifted1[row + x] = tgt1[row + xt];
+        shifted2[row + x] = tgt2[row + xt];
+        product[row + x] = r[x][0] * t[xt][0] + r[x][1] * t[xt][1] + r[x][2] * t[xt][2];
+      }
+    }
+    box.Sum(shifted1.data(), s_t.data());
+    box.Sum(shifted2.data(), s_t2.data());
+    box.Sum(product.data(), s_rt.data());
+    for (int y = 0; y < height; ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * width;
+      for (int x = std::max(0, d); x < std::min(width, width + d); ++x) {
+        const std::size_t i = row + x;
+        const double sr = s_ref[i], st = s_t[i];
+        const double var_r = s_ref2[i] - sr * sr / n;
+        const double var_t = s_t2[i] - st * st / n;
         const double denominator = std::sqrt(std::max(0.0, var_r) * std::max(0.0, var_t));
         if (denominator < 1e-6) continue;  // a flat patch has no correlation
-        const double ncc = (s_rt.at<double>(y, x) - sr * st / n) / denominator;
-        top[static_cast<size_t>(y) * ref.cols + x].Insert(1.0 - ncc, d);
+        const double ncc = (s_rt[i] - sr * st / n) / denominator;
+        top[i].Insert(1.0 - ncc, d);
       }
     }
   }
