@@ -119,7 +119,8 @@ void AdaptiveWeightEvidence(const cv::Mat& left_bgr, const cv::Mat& right_bgr, i
   const int height = left_bgr.rows;
   const int num_d = dmax - dmin + 1;
   cv::Mat lab[2];
-  tbb::parallel_for(0, 2, [&](int v) { lab[v] = ToLab(v == 0 ? left_bgr : right_bgr); });
+  lab[0] = ToLab(left_bgr);
+  lab[1] = ToLab(right_bgr);
 
   // The window offsets, row by row, each row's columns ascending; the mirrored order takes each
   // row's columns descending (the column offsets are symmetric: −reach … reach).
