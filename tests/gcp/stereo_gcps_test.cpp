@@ -7,6 +7,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -84,6 +85,31 @@ TEST(StereoGcpsTest, SyntheticPairGivesCorrectSparseGcps) {
   }
 }
 
+// A 29×17 pair for the per-pixel formula tests: `left` a smooth random texture (a 9×6 grid of
+// random colours from `seed`, interpolated; `flat` painted grey), right(x) = left(x + shift) plus
+// uniform noise in [0, 12) from `noise_seed` (its own generator: not the global RNG's state).
+std::pair<cv::Mat, cv::Mat> SmallShiftedPair(unsigned seed, int noise_seed, int shift,
+                                             cv::Rect flat = {}) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> value(0, 255);
+  cv::Mat small(6, 9, CV_8UC3), left;
+  for (auto it = small.begin<cv::Vec3b>(); it != small.end<cv::Vec3b>(); ++it) {
+    *it = cv::Vec3b(value(rng), value(rng), value(rng));
+  }
+  cv::resize(small, left, cv::Size(29, 17), 0, 0, cv::INTER_LINEAR);
+  if (!flat.empty()) left(flat).setTo(cv::Scalar(90, 90, 90));
+  cv::Mat noise(left.size(), CV_8UC3);
+  cv::RNG(noise_seed).fill(noise, cv::RNG::UNIFORM, 0, 12);
+  cv::Mat right(left.size(), CV_8UC3);
+  for (int y = 0; y < left.rows; ++y) {
+    for (int x = 0; x < left.cols; ++x) {
+      right.at<cv::Vec3b>(y, x) = left.at<cv::Vec3b>(y, std::min(left.cols - 1, x + shift));
+    }
+  }
+  right += noise;
+  return {left, right};
+}
+
 // The adaptive-weight evidence against the Yoon–Kweon cost evaluated pixel by pixel and
 // disparity by disparity (CIELab weights of both windows, truncated RGB differences, the window
 // sampled every aw_stride_px): same WTA, same uniqueness, same parabola vertex, near the image
@@ -91,22 +117,8 @@ TEST(StereoGcpsTest, SyntheticPairGivesCorrectSparseGcps) {
 // view (partner x − d) and in the right view (partner x + d). Rows of 29 px: the 16-px blocks of
 // the vectorised sums and their scalar tails both take part.
 TEST(StereoGcpsTest, AdaptiveWeightEvidenceIsThePerPixelFormula) {
-  std::mt19937 rng(23);
-  std::uniform_int_distribution<int> value(0, 255);
-  cv::Mat small(6, 9, CV_8UC3), left, right;
-  for (auto it = small.begin<cv::Vec3b>(); it != small.end<cv::Vec3b>(); ++it) {
-    *it = cv::Vec3b(value(rng), value(rng), value(rng));
-  }
-  cv::resize(small, left, cv::Size(29, 17), 0, 0, cv::INTER_LINEAR);
-  cv::Mat noise(left.size(), CV_8UC3);
-  cv::RNG(29).fill(noise, cv::RNG::UNIFORM, 0, 12);  // its own seed: not the global RNG's state
-  right = cv::Mat(left.size(), CV_8UC3);
-  for (int y = 0; y < left.rows; ++y) {  // right(x) = left(x + 3) + noise
-    for (int x = 0; x < left.cols; ++x) {
-      right.at<cv::Vec3b>(y, x) = left.at<cv::Vec3b>(y, std::min(left.cols - 1, x + 3));
-    }
-  }
-  right += noise;
+  const std::pair<cv::Mat, cv::Mat> pair = SmallShiftedPair(23, 29, 3);
+  const cv::Mat &left = pair.first, &right = pair.second;
   const int dmin = 0, dmax = 6;
   auto lab = [](const cv::Mat& bgr) {
     cv::Mat f, out;
@@ -202,23 +214,9 @@ TEST(StereoGcpsTest, AdaptiveWeightEvidenceIsThePerPixelFormula) {
 // column repeated where x − d leaves it), flat patches skipped; same WTA (ties to the smaller
 // d), same uniqueness, in both views, windows 3 and 5 on a 29×17 pair.
 TEST(StereoGcpsTest, NccEvidenceIsThePerPixelFormula) {
-  std::mt19937 rng(31);
-  std::uniform_int_distribution<int> value(0, 255);
-  cv::Mat small(6, 9, CV_8UC3), left, right;
-  for (auto it = small.begin<cv::Vec3b>(); it != small.end<cv::Vec3b>(); ++it) {
-    *it = cv::Vec3b(value(rng), value(rng), value(rng));
-  }
-  cv::resize(small, left, cv::Size(29, 17), 0, 0, cv::INTER_LINEAR);
-  left(cv::Rect(0, 0, 8, 6)).setTo(cv::Scalar(90, 90, 90));  // a flat corner: no correlation
-  cv::Mat noise(left.size(), CV_8UC3);
-  cv::RNG(37).fill(noise, cv::RNG::UNIFORM, 0, 12);
-  right = cv::Mat(left.size(), CV_8UC3);
-  for (int y = 0; y < left.rows; ++y) {  // right(x) = left(x + 2) + noise
-    for (int x = 0; x < left.cols; ++x) {
-      right.at<cv::Vec3b>(y, x) = left.at<cv::Vec3b>(y, std::min(left.cols - 1, x + 2));
-    }
-  }
-  right += noise;
+  // A flat corner: no correlation there.
+  const std::pair<cv::Mat, cv::Mat> pair = SmallShiftedPair(31, 37, 2, cv::Rect(0, 0, 8, 6));
+  const cv::Mat &left = pair.first, &right = pair.second;
   const int dmin = 0, dmax = 5;
   for (const int window : {3, 5}) {
     StereoGcpOptions options;
