@@ -3,11 +3,13 @@
 #   1. the whole suite on the normal build in build/;
 #   2. the unit suite again under AddressSanitizer (with LeakSanitizer) and UndefinedBehaviorSanitizer,
 #      in build-asan/ (GCPSTEREO_SANITIZE=ON, -O1 -g1 so that it is not too slow and reports name
-#      the source line). Each test executable runs whole,
-#      in GoogleTest shards side by side, without the tests listed (with their reasons) in
-#      tools/sanitizers/skipped_tests.txt; logs in build-asan/sanitizer-logs/. Any sanitizer report
-#      fails the shard that caused it: UBSan is built with -fno-sanitize-recover=undefined and halts,
-#      ASan and LSan exit non-zero. Each shard may take 1800 s (GCPSTEREO_TEST_TIMEOUT).
+#      the source line). Each GoogleTest executable runs whole, in shards side by side, without
+#      the tests listed (with their reasons) in tools/sanitizers/skipped_tests.txt; logs in
+#      build-asan/sanitizer-logs/. Any sanitizer report fails the shard that caused it: UBSan is
+#      built with -fno-sanitize-recover=undefined and halts, ASan and LSan exit non-zero. Each
+#      shard may take 1800 s (environment GCPSTEREO_TEST_TIMEOUT). The Snakemake test
+#      (pipeline.Workflow, a Python script driving the gcpstereo command) is ctest's only and runs
+#      in part 1 alone: it orchestrates the scene run that TinySceneRun covers here.
 #
 # Under the sanitizers the tests on the real data in ../shared/data are skipped (GCPSTEREO_DATA is
 # pointed at a missing folder, so they skip with their usual message): they run the same readers and
