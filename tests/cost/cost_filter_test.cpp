@@ -410,7 +410,8 @@ TEST(CostFilter, LabelBandsHoldTheFullVolumesEntries) {
   const cv::Mat right = RandomImage(70, 300, CV_8UC3, 52);
   std::vector<double> whole_pixels, fractional;
   for (int i = 0; i < 40; ++i) whole_pixels.push_back(i);
-  for (int i = 0; i < 12; ++i) fractional.push_back(0.75 * i);
+  // 11 labels: the last group of 4 labels side by side holds 3.
+  for (int i = 0; i < 11; ++i) fractional.push_back(0.75 * i);
   int inside = 0, outside = 0;
   for (const std::vector<double>* d : {&whole_pixels, &fractional}) {
     const int num_labels = static_cast<int>(d->size());

@@ -9,7 +9,7 @@
 
 namespace gcpstereo {
 
-CostVolume::CostVolume(cv::Rect region, int num_labels, float max_cost)
+CostVolume::CostVolume(cv::Rect region, int num_labels, float max_cost, std::uint16_t fill)
     : region_(region), num_labels_(num_labels), max_cost_(max_cost) {
   if (region.width <= 0 || region.height <= 0 || num_labels <= 0 || !(max_cost > 0.0f) ||
       !std::isfinite(max_cost)) {
@@ -19,7 +19,7 @@ CostVolume::CostVolume(cv::Rect region, int num_labels, float max_cost)
     throw Error(s.str());
   }
   cost_step_ = max_cost / 65534.0f;
-  data_.assign(static_cast<std::size_t>(region.width) * region.height * num_labels, kNoData);
+  data_.assign(static_cast<std::size_t>(region.width) * region.height * num_labels, fill);
 }
 
 std::uint16_t CostVolume::Encode(float cost) const {

@@ -564,7 +564,10 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
   if (bands != nullptr && bands->empty()) bands = nullptr;
   if (bands != nullptr) bands->CheckFits(region.size(), "cost filter");
   const int num_labels = raw.num_labels();
-  CostVolume out(region, num_labels, raw.max_cost());
+  // With bands, the entries outside them are kNotComputed from the start: the filter writes only
+  // the bands.
+  CostVolume out(region, num_labels, raw.max_cost(),
+                 bands != nullptr ? internal::kNotComputed : CostVolume::kNoData);
   const int ox = region.x - outer.x, oy = region.y - outer.y;
   // The band of the block of region pixel (row, col).
   auto band_of = [&](int row, int col, int* lo, int* hi) {
@@ -670,12 +673,27 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
           // labels lie in chunks whose rows cover it): no initialisation.
           std::vector<std::uint16_t> in(num_chunks * in_plane, 0);
           std::unique_ptr<std::uint16_t[]> filtered(new std::uint16_t[num_chunks * out_plane]);
+          // Each chunk reads only its own rows [chunk_begin, chunk_end) of `in` (FilterChunk):
+          // a row's entries are copied to the chunks that stream it, kLanes labels at a time.
+          const int full_chunks = group_count / kLanes;
+          std::vector<char> streams(num_chunks);
           for (int y = copy_begin; y < copy_end; ++y) {
+            for (int c = 0; c < num_chunks; ++c) {
+              streams[c] = chunk_begin[c] <= y && y < chunk_end[c];
+            }
+            const std::size_t row = static_cast<std::size_t>(y - copy_begin) * w;
             for (int x = 0; x < w; ++x) {
               const std::uint16_t* entries = raw.PixelData(y, sx + x) + group_first;
-              const std::size_t p = (static_cast<std::size_t>(y - copy_begin) * w + x) * kLanes;
-              for (int i = 0; i < group_count; ++i) {
-                in[(i / kLanes) * in_plane + p + i % kLanes] = entries[i];
+              std::uint16_t* lanes = &in[(row + x) * kLanes];
+              for (int c = 0; c < full_chunks; ++c) {
+                if (streams[c]) {
+                  std::memcpy(lanes + c * in_plane, entries + c * kLanes, sizeof(*lanes) * kLanes);
+                }
+              }
+              if (full_chunks < num_chunks && streams[full_chunks]) {
+                for (int i = full_chunks * kLanes; i < group_count; ++i) {
+                  lanes[full_chunks * in_plane + i % kLanes] = entries[i];
+                }
               }
             }
           }
@@ -694,10 +712,7 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
               band_of(y, x - job.region.x, &lo, &hi);
               lo = std::max(lo, group_first);
               hi = std::min(hi, group_last);
-              if (lo > group_first || hi < group_last) {
-                ClearOutsideBand(group_first, group_count, lo, hi, entries);
-              }
-              if (lo > hi) continue;
+              if (lo > hi) continue;  // outside the bands: kNotComputed since `out` was made
               const std::size_t p =
                   (static_cast<std::size_t>(y - out_begin) * (x1 - x0) + x - x0) * kLanes;
               for (int l = lo; l <= hi; ++l) {

@@ -12,6 +12,7 @@
 #include <opencv2/core.hpp>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/core/huge_page_allocator.h"
 #include "gcpstereo/core/system.h"
 #include "gcpstereo/cost/winner_take_all.h"
 
@@ -403,7 +404,8 @@ class ExpansionSolver {
   const int width_, height_, num_labels_, num_pixels_;
   const int block_px_, blocks_x_, blocks_y_;
   const CostVolume* cost_volume_ = nullptr;
-  std::vector<std::uint16_t> costs_by_label_;
+  // As large as the cost volume and written whole at once: huge pages (huge_page_allocator.h).
+  std::vector<std::uint16_t, HugePageAllocator<std::uint16_t>> costs_by_label_;
   bool use_prior_ = false;
   std::vector<float> prior_;
   std::vector<double> prior_scale_;  // λr·ω_p

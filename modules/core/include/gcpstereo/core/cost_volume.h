@@ -8,6 +8,8 @@
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
 
+#include "gcpstereo/core/huge_page_allocator.h"
+
 namespace gcpstereo {
 
 // Matching costs Φ(p, l) of every label at every pixel of a rectangular region of the reference
@@ -20,8 +22,9 @@ namespace gcpstereo {
 class CostVolume {
  public:
   CostVolume() = default;
-  // `region` is the area of the reference image covered (x, y = its top-left pixel).
-  CostVolume(cv::Rect region, int num_labels, float max_cost);
+  // `region` is the area of the reference image covered (x, y = its top-left pixel). Every entry
+  // starts as `fill` (a stored value: kNoData, or a cost step a caller writes around).
+  CostVolume(cv::Rect region, int num_labels, float max_cost, std::uint16_t fill = kNoData);
 
   const cv::Rect& region() const { return region_; }
   int width() const { return region_.width; }
@@ -60,7 +63,8 @@ class CostVolume {
   int num_labels_ = 0;
   float max_cost_ = 0.0f;
   float cost_step_ = 0.0f;
-  std::vector<std::uint16_t> data_;
+  // Written whole as soon as it is allocated: huge pages (huge_page_allocator.h).
+  std::vector<std::uint16_t, HugePageAllocator<std::uint16_t>> data_;
 };
 
 // The labels a caller will read of a cost volume, per square block of the volume's region: block
