@@ -16,6 +16,7 @@
 #include "gcpstereo/core/error.h"
 #include "gcpstereo/core/logging.h"
 #include "gcpstereo/core/progress.h"
+#include "gcpstereo/propagation/sparse_solver.h"
 #include "gcpstereo/synth/generator.h"
 
 namespace {
@@ -42,6 +43,7 @@ const CLI::Validator kOutputFolder(
 int main(int argc, char** argv) {
   // Progress messages to stdout, warnings and errors to stderr.
   gcpstereo::InstallConsoleLogger();
+  gcpstereo::propagation::UseHugePagesInSuiteSparse();  // before any thread uses SuiteSparse
 
   CLI::App app{
       "gcpstereo — dense depth maps and meshes from calibrated images and sparse ground control "

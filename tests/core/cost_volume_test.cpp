@@ -39,6 +39,19 @@ TEST(HugePageAllocator, KeepsWhatIsWrittenAtAnySize) {
       ASSERT_EQ(values[i], static_cast<std::uint16_t>(i * 7919)) << n << " " << i;
     }
   }
+  // calloc's and realloc's contracts, across the 2 MiB boundary.
+  for (const std::size_t n : {std::size_t{10}, kHugePageBytes + 3}) {
+    auto* zeros = static_cast<unsigned char*>(CallocHugePageBacked(n, 1));
+    ASSERT_NE(zeros, nullptr);
+    for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(zeros[i], 0) << n << " " << i;
+    zeros[n - 1] = 42;
+    auto* grown = static_cast<unsigned char*>(ReallocHugePageBacked(zeros, 3 * kHugePageBytes));
+    ASSERT_NE(grown, nullptr);
+    EXPECT_EQ(grown[n - 1], 42);
+    grown[3 * kHugePageBytes - 1] = 7;
+    FreeHugePageBacked(grown);
+  }
+  EXPECT_EQ(CallocHugePageBacked(static_cast<std::size_t>(-1) / 2, 4), nullptr);
   CostVolume volume(cv::Rect(0, 0, 300, 200), 40, 1.0f);  // 4.8 MB
   volume.SetCost(199, 299, 39, 0.5f);
   EXPECT_NEAR(volume.Cost(199, 299, 39), 0.5f, volume.cost_step());

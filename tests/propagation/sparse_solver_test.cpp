@@ -1,6 +1,8 @@
 // Copyright (C) 2026 the gcpstereo authors. SPDX-License-Identifier: GPL-3.0-or-later
 #include "gcpstereo/propagation/sparse_solver.h"
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -39,6 +41,43 @@ TEST(SparseSolverTest, SolvesSmallSystems) {
     EXPECT_NEAR(y_ch[i], i + 1.0, 1e-12);
   }
   EXPECT_THROW(SolveSparseLinearSystem(full, b, SparseSolverKind::kUmfpack, {0, 0, 1}), Error);
+}
+
+// SuiteSparse allocating on huge pages (what gcpstereo's main sets) solves to the same bits: a
+// tridiagonal system whose factors are megabytes, before and after the switch.
+TEST(SparseSolverTest, HugePagesInSuiteSparseGiveTheSameSolution) {
+  const int n = 200000;
+  CscMatrix full{n, {0}, {}, {}};
+  CscMatrix lower{n, {0}, {}, {}};
+  for (int col = 0; col < n; ++col) {
+    for (int row = std::max(0, col - 1); row <= std::min(n - 1, col + 1); ++row) {
+      const double value = row == col ? 2.5 + 0.001 * (col % 7) : -1.0;
+      full.row_indices.push_back(row);
+      full.values.push_back(value);
+      if (row >= col) {
+        lower.row_indices.push_back(row);
+        lower.values.push_back(value);
+      }
+    }
+    full.col_starts.push_back(static_cast<int>(full.row_indices.size()));
+    lower.col_starts.push_back(static_cast<int>(lower.row_indices.size()));
+  }
+  std::vector<double> b(n);
+  for (int i = 0; i < n; ++i) b[i] = std::sin(0.01 * i);
+  const std::vector<double> lu = SolveSparseLinearSystem(full, b, SparseSolverKind::kUmfpack);
+  const std::vector<double> ch = SolveSparseLinearSystem(lower, b, SparseSolverKind::kCholmod);
+  UseHugePagesInSuiteSparse();
+  UseHugePagesInSuiteSparse();  // a second call does nothing
+  EXPECT_EQ(SolveSparseLinearSystem(full, b, SparseSolverKind::kUmfpack), lu);
+  EXPECT_EQ(SolveSparseLinearSystem(lower, b, SparseSolverKind::kCholmod), ch);
+  double residual = 0.0;
+  for (int i = 0; i < n; ++i) {
+    double ax = (2.5 + 0.001 * (i % 7)) * ch[i];
+    if (i > 0) ax -= ch[i - 1];
+    if (i + 1 < n) ax -= ch[i + 1];
+    residual = std::max(residual, std::abs(ax - b[i]));
+  }
+  EXPECT_LT(residual, 1e-9);
 }
 
 TEST(SparseSolverTest, SingularMatrixFailsWithUmfpackStatus) {

@@ -22,6 +22,8 @@
 #include <tbb/parallel_for.h>
 #include <opencv2/imgproc.hpp>
 
+#include "gcpstereo/core/huge_page_allocator.h"
+
 namespace gcpstereo::gcp::internal {
 
 float UniquenessOfCurve(const double* cost, const bool* valid, int count, int best) {
@@ -154,7 +156,9 @@ void AdaptiveWeightEvidence(const cv::Mat& left_bgr, const cv::Mat& right_bgr, i
   // value there that its zero weight cancels.
   const int plane_width = width + 2 * reach;
   const std::ptrdiff_t row_stride = static_cast<std::ptrdiff_t>(num_d) * plane_width;
-  std::vector<float> tad(static_cast<std::size_t>(height + 2 * reach) * row_stride, 0.0f);
+  // Tens of MB written whole at once: huge pages (core/huge_page_allocator.h).
+  std::vector<float, HugePageAllocator<float>> tad(
+      static_cast<std::size_t>(height + 2 * reach) * row_stride, 0.0f);
   const float truncation = static_cast<float>(options.aw_truncation);
   tbb::parallel_for(0, num_d, [&](int i) {
     const int d = dmin + i;

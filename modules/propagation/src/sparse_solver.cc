@@ -4,12 +4,14 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include <cholmod.h>
 #include <umfpack.h>
 
 #include "gcpstereo/core/error.h"
+#include "gcpstereo/core/huge_page_allocator.h"
 
 namespace gcpstereo::propagation {
 namespace {
@@ -202,6 +204,16 @@ std::vector<double> SolveCholmod(const CscMatrix& a, const std::vector<double>& 
 }
 
 }  // namespace
+
+void UseHugePagesInSuiteSparse() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    SuiteSparse_config.malloc_func = MallocHugePageBacked;
+    SuiteSparse_config.calloc_func = CallocHugePageBacked;
+    SuiteSparse_config.realloc_func = ReallocHugePageBacked;
+    SuiteSparse_config.free_func = FreeHugePageBacked;
+  });
+}
 
 const char* SparseSolverKindName(SparseSolverKind kind) {
   return kind == SparseSolverKind::kUmfpack ? "umfpack" : "cholmod";
