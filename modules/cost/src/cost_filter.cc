@@ -533,15 +533,6 @@ GCPSTEREO_AVX2_CLONE void FilterChunk(const ChunkJob& job, int first, int count,
   }
 }
 
-// Sets the entries of one pixel's labels [first, first + count) outside its band [lo, hi] to the
-// largest cost (LabelBands: not computed).
-inline void ClearOutsideBand(int first, int count, int lo, int hi, std::uint16_t* entries) {
-  for (int i = 0; i < count; ++i) {
-    const int l = first + i;
-    if (l < lo || l > hi) entries[i] = internal::kNotComputed;
-  }
-}
-
 }  // namespace
 
 CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const cv::Rect& region,
@@ -581,12 +572,13 @@ CostVolume FilterCostVolume(const CostVolume& raw, const cv::Mat& guide, const c
   if (options.window_px == 1) {
     for (int r = 0; r < region.height; ++r) {
       for (int c = 0; c < region.width; ++c) {
-        const std::uint16_t* entries = raw.PixelData(oy + r, ox + c);
-        std::uint16_t* dst = out.MutablePixelData(r, c);
-        std::copy_n(entries, num_labels, dst);
         int lo = 0, hi = 0;
         band_of(r, c, &lo, &hi);
-        ClearOutsideBand(0, num_labels, lo, hi, dst);
+        lo = std::max(lo, 0);
+        hi = std::min(hi, num_labels - 1);
+        if (lo > hi) continue;  // outside the bands: kNotComputed since `out` was made
+        const std::uint16_t* entries = raw.PixelData(oy + r, ox + c);
+        std::copy(entries + lo, entries + hi + 1, out.MutablePixelData(r, c) + lo);
       }
     }
     return out;

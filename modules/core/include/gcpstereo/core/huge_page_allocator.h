@@ -24,6 +24,7 @@ void* MallocHugePageBacked(std::size_t bytes) noexcept;
 // to 2 MiB or more is advised too.
 void* CallocHugePageBacked(std::size_t count, std::size_t size) noexcept;
 void* ReallocHugePageBacked(void* block, std::size_t bytes) noexcept;
+void FreeHugePageBacked(void* block) noexcept;  // std::free
 
 template <typename T>
 struct HugePageAllocator {
@@ -38,19 +39,12 @@ struct HugePageAllocator {
     if (block == nullptr) throw std::bad_alloc();
     return static_cast<T*>(block);
   }
-  void deallocate(T* p, std::size_t) noexcept;
+  void deallocate(T* p, std::size_t) noexcept { FreeHugePageBacked(p); }
 
   template <typename U>
   bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
   template <typename U>
   bool operator!=(const HugePageAllocator<U>&) const noexcept { return false; }
 };
-
-void FreeHugePageBacked(void* block) noexcept;  // std::free
-
-template <typename T>
-void HugePageAllocator<T>::deallocate(T* p, std::size_t) noexcept {
-  FreeHugePageBacked(p);
-}
 
 }  // namespace gcpstereo
